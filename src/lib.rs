@@ -11,6 +11,7 @@
 //! Quaternions are scalar first, `(w, x, y, z)`.
 
 pub mod error;
+pub mod ffi;
 pub mod normalization;
 pub mod special;
 

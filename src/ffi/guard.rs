@@ -1,0 +1,380 @@
+//! The C boundary's safety net: the panic guard around every export, pointer and length checks,
+//! copying in and out of caller memory, and the thread-local last error message.
+//!
+//! All `unsafe` of the crate lives in `src/ffi/`; the helpers here keep it in a few small places.
+
+use std::any::Any;
+use std::cell::RefCell;
+use std::os::raw::c_char;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+use super::status::bingham_status;
+use crate::error::{check_dim, Error};
+
+thread_local! {
+    /// The message of the most recent failed call on this thread (empty: none yet).
+    /// The only mutable state of the library; one per thread, so no locking.
+    static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
+}
+
+/// An error on its way to C: the status to return and the message to store.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Failure {
+    pub(crate) status: bingham_status,
+    pub(crate) message: String,
+}
+
+impl Failure {
+    pub(crate) fn new(status: bingham_status, message: impl Into<String>) -> Failure {
+        Failure {
+            status,
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn null(name: &str) -> Failure {
+        Failure::new(
+            bingham_status::BINGHAM_ERR_NULL_ARGUMENT,
+            format!("`{name}` is NULL"),
+        )
+    }
+
+    pub(crate) fn argument(message: impl Into<String>) -> Failure {
+        Failure::new(bingham_status::BINGHAM_ERR_INVALID_ARGUMENT, message)
+    }
+
+    pub(crate) fn dimension(message: impl Into<String>) -> Failure {
+        Failure::new(bingham_status::BINGHAM_ERR_INVALID_DIMENSION, message)
+    }
+
+    /// Adds context (e.g. which argument or row) in front of the message.
+    pub(crate) fn context(mut self, what: impl std::fmt::Display) -> Failure {
+        self.message = format!("{what}: {}", self.message);
+        self
+    }
+}
+
+impl From<Error> for Failure {
+    fn from(e: Error) -> Failure {
+        Failure::new(bingham_status::from(&e), e.to_string())
+    }
+}
+
+pub(crate) type FfiResult<T> = Result<T, Failure>;
+
+fn set_last_error(message: String) {
+    // `try_with`: during thread teardown the slot may be gone; then the message is dropped.
+    let _ = LAST_ERROR.try_with(|slot| {
+        if let Ok(mut s) = slot.try_borrow_mut() {
+            *s = message;
+        }
+    });
+}
+
+fn panic_message(payload: &(dyn Any + Send)) -> &str {
+    if let Some(s) = payload.downcast_ref::<&'static str>() {
+        s
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.as_str()
+    } else {
+        "(no message)"
+    }
+}
+
+/// Runs the body of the exported function `name`: catches panics, turns errors into a status and
+/// stores their message (prefixed with `name`) as this thread's last error.
+pub(crate) fn guard(name: &'static str, body: impl FnOnce() -> FfiResult<()>) -> bingham_status {
+    match catch_unwind(AssertUnwindSafe(body)) {
+        Ok(Ok(())) => bingham_status::BINGHAM_OK,
+        Ok(Err(failure)) => {
+            set_last_error(format!("{name}: {}", failure.message));
+            failure.status
+        }
+        Err(payload) => {
+            set_last_error(format!(
+                "{name}: internal error (panic): {}",
+                panic_message(payload.as_ref())
+            ));
+            bingham_status::BINGHAM_ERR_PANIC
+        }
+    }
+}
+
+/// `d` within `MIN_DIM..=MAX_DIM`; checked before any array is read, because array lengths
+/// are derived from `d`.
+pub(crate) fn dim(d: usize) -> FfiResult<()> {
+    check_dim(d).map_err(Failure::from)
+}
+
+/// `a * b` as an array length (elements of `f64`), refusing overflow.
+pub(crate) fn len2(what: &str, a: usize, b: usize) -> FfiResult<usize> {
+    a.checked_mul(b)
+        .filter(|&n| n <= isize::MAX as usize / std::mem::size_of::<f64>())
+        .ok_or_else(|| Failure::dimension(format!("`{what}`: {a} * {b} elements overflow")))
+}
+
+/// A required pointer: not NULL and aligned for `T`.
+pub(crate) fn need<T>(name: &str, p: *const T) -> FfiResult<()> {
+    if p.is_null() {
+        Err(Failure::null(name))
+    } else if (p as usize) % std::mem::align_of::<T>() != 0 {
+        Err(Failure::new(
+            bingham_status::BINGHAM_ERR_NULL_ARGUMENT,
+            format!("`{name}` is not aligned for its type"),
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// An optional pointer: NULL or aligned. Returns whether it is present.
+pub(crate) fn optional<T>(name: &str, p: *const T) -> FfiResult<bool> {
+    if p.is_null() {
+        Ok(false)
+    } else {
+        need(name, p).map(|()| true)
+    }
+}
+
+/// Borrows the caller's input array `p[0..len]` after checking the pointer and that every entry
+/// is finite. `len == 0` accepts a NULL pointer and gives an empty slice.
+///
+/// # Safety
+/// `p` must be NULL or point to `len` readable `double`s that stay valid and are not written
+/// while the returned slice is used (the C caller's side of the contract in the header).
+pub(crate) unsafe fn read<'a>(name: &str, p: *const f64, len: usize) -> FfiResult<&'a [f64]> {
+    if len == 0 {
+        return Ok(&[]);
+    }
+    need(name, p)?;
+    // SAFETY: p is non-NULL and aligned (checked above); the caller guarantees `len` readable
+    // doubles; `len * 8 <= isize::MAX` is guaranteed by the callers (`len2` or `len <= 64²`).
+    let s = unsafe { std::slice::from_raw_parts(p, len) };
+    if let Some(i) = s.iter().position(|v| !v.is_finite()) {
+        return Err(Failure::argument(format!(
+            "`{name}[{i}]` = {} is not finite",
+            s[i]
+        )));
+    }
+    Ok(s)
+}
+
+/// Copies a computed result into the caller's output array. Called only after every input has
+/// been read and the whole computation has succeeded, so outputs may overlap inputs (in-place
+/// use) and nothing is written on error.
+///
+/// # Safety
+/// `p` must be non-NULL, aligned, and point to `src.len()` writable `double`s; no Rust reference
+/// to that memory may be used afterwards.
+pub(crate) unsafe fn write(p: *mut f64, src: &[f64]) {
+    debug_assert!(!p.is_null());
+    // SAFETY: the caller guarantees `src.len()` writable doubles at `p`; `src` is library-owned
+    // memory, so the two ranges do not overlap.
+    unsafe { std::ptr::copy_nonoverlapping(src.as_ptr(), p, src.len()) }
+}
+
+/// Writes one `double` result.
+///
+/// # Safety
+/// As for [`write`], with one element.
+pub(crate) unsafe fn write1(p: *mut f64, value: f64) {
+    // SAFETY: forwarded contract.
+    unsafe { write(p, std::slice::from_ref(&value)) }
+}
+
+/// Copies the calling thread's last error message into a caller buffer.
+///
+/// The message describes the most recent call **on this thread** that returned a status other
+/// than `BINGHAM_OK`, e.g. `"bingham_pdf: x row 2: invalid argument: not a unit vector …"`
+/// (UTF-8, no trailing newline). Successful calls do not clear it (like `errno`), so read it
+/// right after the failing call. If no call has failed yet on this thread, the message is the
+/// empty string. This function never changes the stored message. Each thread has its own
+/// message; no locking is involved.
+///
+/// - `out_len` (may be `NULL`): receives the full length of the message in bytes, without the
+///   terminating NUL, whether or not it fits.
+/// - `buf`, `len`: when `len > 0`, at most `len - 1` bytes of the message are copied to `buf`
+///   (cut at a UTF-8 character boundary, so the copy may be shorter) and a NUL is always
+///   written after them. When `len == 0`, nothing is written and `buf` may be `NULL`: use this
+///   to query the length, then call again with a buffer of `*out_len + 1` bytes.
+/// - The message was truncated if and only if `*out_len >= len`.
+///
+/// Returns `BINGHAM_OK`, or `BINGHAM_ERR_NULL_ARGUMENT` if `buf` is `NULL` while `len > 0`
+/// (nothing written).
+///
+/// # Safety
+/// `buf` must be `NULL` or point to `len` writable bytes; `out_len` must be `NULL` or point to a
+/// writable `size_t`.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_last_error_message(
+    buf: *mut c_char,
+    len: usize,
+    out_len: *mut usize,
+) -> bingham_status {
+    let result = catch_unwind(AssertUnwindSafe(|| {
+        if len > 0 && buf.is_null() {
+            return bingham_status::BINGHAM_ERR_NULL_ARGUMENT;
+        }
+        if !out_len.is_null() && (out_len as usize) % std::mem::align_of::<usize>() != 0 {
+            return bingham_status::BINGHAM_ERR_NULL_ARGUMENT;
+        }
+        let copy = |message: &str| {
+            if len > 0 {
+                let mut n = message.len().min(len - 1);
+                while !message.is_char_boundary(n) {
+                    n -= 1;
+                }
+                // SAFETY: buf is non-NULL (checked) and has `len` writable bytes (caller
+                // contract); we write n + 1 <= len bytes from library-owned memory.
+                unsafe {
+                    std::ptr::copy_nonoverlapping(message.as_ptr(), buf.cast::<u8>(), n);
+                    *buf.add(n) = 0;
+                }
+            }
+            if !out_len.is_null() {
+                // SAFETY: out_len is non-NULL and aligned (checked) and writable (contract).
+                unsafe { *out_len = message.len() };
+            }
+        };
+        match LAST_ERROR.try_with(|slot| copy(&slot.borrow())) {
+            Ok(()) => {}
+            Err(_) => copy(""),
+        }
+        bingham_status::BINGHAM_OK
+    }));
+    result.unwrap_or(bingham_status::BINGHAM_ERR_PANIC)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use bingham_status::*;
+
+    fn last() -> String {
+        let mut n = 0usize;
+        // SAFETY: len == 0 with a NULL buffer is the documented length query.
+        assert_eq!(
+            unsafe { bingham_last_error_message(std::ptr::null_mut(), 0, &mut n) },
+            BINGHAM_OK
+        );
+        let mut buf = vec![0 as c_char; n + 1];
+        let mut n2 = 0usize;
+        // SAFETY: buf has n + 1 writable bytes.
+        assert_eq!(
+            unsafe { bingham_last_error_message(buf.as_mut_ptr(), buf.len(), &mut n2) },
+            BINGHAM_OK
+        );
+        assert_eq!(n, n2);
+        let bytes: Vec<u8> = buf[..n].iter().map(|&c| c as u8).collect();
+        assert_eq!(buf[n], 0);
+        String::from_utf8(bytes).unwrap()
+    }
+
+    #[test]
+    fn panic_is_caught_and_reported() {
+        let prev = std::panic::take_hook();
+        std::panic::set_hook(Box::new(|_| {}));
+        let st = guard("bingham_test", || panic!("boom {}", 42));
+        let st2 = guard("bingham_test2", || -> FfiResult<()> {
+            std::panic::panic_any(7u8)
+        });
+        std::panic::set_hook(prev);
+        assert_eq!(st2, BINGHAM_ERR_PANIC);
+        assert_eq!(
+            last(),
+            "bingham_test2: internal error (panic): (no message)"
+        );
+        assert_eq!(st, BINGHAM_ERR_PANIC);
+        let st = guard("bingham_test", || {
+            std::panic::resume_unwind(Box::new("static boom"))
+        });
+        assert_eq!(st, BINGHAM_ERR_PANIC);
+        assert_eq!(last(), "bingham_test: internal error (panic): static boom");
+    }
+
+    #[test]
+    fn errors_are_stored_per_thread_and_not_cleared_by_success() {
+        std::thread::spawn(|| assert_eq!(last(), ""))
+            .join()
+            .unwrap();
+        let st = guard("bingham_f", || Err(Failure::argument("bad x")));
+        assert_eq!(st, BINGHAM_ERR_INVALID_ARGUMENT);
+        assert_eq!(last(), "bingham_f: bad x");
+        assert_eq!(guard("bingham_g", || Ok(())), BINGHAM_OK);
+        assert_eq!(last(), "bingham_f: bad x");
+        std::thread::spawn(|| assert_eq!(last(), ""))
+            .join()
+            .unwrap();
+        let st = guard("bingham_h", || {
+            Err(Error::NotConverged("slow".into()).into())
+        });
+        assert_eq!(st, BINGHAM_ERR_NOT_CONVERGED);
+        assert_eq!(last(), "bingham_h: not converged: slow");
+    }
+
+    #[test]
+    fn truncation_and_null_handling() {
+        let _ = guard("bingham_é", || Err(Failure::argument("αβγ")));
+        let full = last();
+        assert_eq!(full, "bingham_é: αβγ");
+        let mut n = 0usize;
+        let mut buf = [1 as c_char; 64];
+        for len in 1..=full.len() + 2 {
+            buf.fill(1);
+            // SAFETY: buf has 64 >= len writable bytes.
+            let st = unsafe { bingham_last_error_message(buf.as_mut_ptr(), len, &mut n) };
+            assert_eq!(st, BINGHAM_OK);
+            assert_eq!(n, full.len());
+            let got: Vec<u8> = buf
+                .iter()
+                .take_while(|&&c| c != 0)
+                .map(|&c| c as u8)
+                .collect();
+            assert!(got.len() < len);
+            let got = String::from_utf8(got).expect("cut at a char boundary");
+            assert!(full.starts_with(&got));
+            assert!(got.len() + 4 > len.min(full.len() + 1) - 1);
+            assert_eq!(buf[len], 1, "nothing written past len");
+        }
+        // SAFETY: NULL buffer with len > 0 is refused without writing.
+        let st = unsafe { bingham_last_error_message(std::ptr::null_mut(), 4, &mut n) };
+        assert_eq!(st, BINGHAM_ERR_NULL_ARGUMENT);
+        // SAFETY: out_len may be NULL.
+        let st = unsafe { bingham_last_error_message(buf.as_mut_ptr(), 64, std::ptr::null_mut()) };
+        assert_eq!(st, BINGHAM_OK);
+        assert_eq!(last(), full, "querying never changes the message");
+    }
+
+    #[test]
+    fn helpers() {
+        assert_eq!(dim(1).unwrap_err().status, BINGHAM_ERR_INVALID_DIMENSION);
+        assert!(dim(2).is_ok() && dim(64).is_ok());
+        assert_eq!(dim(65).unwrap_err().status, BINGHAM_ERR_INVALID_DIMENSION);
+        assert_eq!(
+            len2("x", usize::MAX, 2).unwrap_err().status,
+            BINGHAM_ERR_INVALID_DIMENSION
+        );
+        assert_eq!(len2("x", 3, 4).unwrap(), 12);
+        assert_eq!(
+            need::<f64>("p", std::ptr::null()).unwrap_err().status,
+            BINGHAM_ERR_NULL_ARGUMENT
+        );
+        let v = [1.0f64, 2.0];
+        let misaligned = (v.as_ptr() as *const u8).wrapping_add(1) as *const f64;
+        assert_eq!(
+            need("p", misaligned).unwrap_err().status,
+            BINGHAM_ERR_NULL_ARGUMENT
+        );
+        assert!(!optional::<f64>("p", std::ptr::null()).unwrap());
+        assert!(optional("p", v.as_ptr()).unwrap());
+        // SAFETY: v has 2 readable doubles; len 0 never reads.
+        unsafe {
+            assert_eq!(read("v", v.as_ptr(), 2).unwrap(), &v);
+            assert!(read("v", std::ptr::null(), 0).unwrap().is_empty());
+            let w = [1.0, f64::NAN];
+            let e = read("w", w.as_ptr(), 2).unwrap_err();
+            assert_eq!(e.status, BINGHAM_ERR_INVALID_ARGUMENT);
+            assert_eq!(e.message, "`w[1]` = NaN is not finite");
+        }
+    }
+}

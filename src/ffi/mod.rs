@@ -1,0 +1,31 @@
+//! The C ABI (`include/bingham.h`): a thin layer over the core, holding all of the crate's
+//! `unsafe` code and none of its mathematics.
+//!
+//! - [`version`]: `bingham_version` and the constants that become `#define`s in the header.
+//! - [`status`]: `bingham_status` and `bingham_status_str`.
+//! - [`guard`]: the panic guard every export runs in, pointer/length checks, copying in and out,
+//!   and the thread-local last error message (`bingham_last_error_message`).
+//! - [`math`]: the distribution functions (`bingham_normalization_constant`, `bingham_mle`, …).
+//!
+//! Conventions (see the header's preamble): row-major `double` arrays, `z` in any order and
+//! shift on input, sorted ascending with `z[d-1] = 0` on output, quaternions scalar first, F
+//! with respect to the surface measure. Every function returns a `bingham_status` and writes its
+//! outputs only on success.
+//!
+//! The header is generated from this module by cbindgen (`cbindgen.toml`); the declarations
+//! appear in the order of the modules below. `tests/header.rs` fails when the committed header
+//! is stale — regenerate it with `make header`.
+
+// One module per group (blank lines keep rustfmt from sorting them): the order is the header's.
+pub mod version;
+
+pub mod status;
+
+pub mod guard;
+
+pub mod math;
+
+pub use guard::bingham_last_error_message;
+pub use math::*;
+pub use status::{bingham_status, bingham_status_str};
+pub use version::*;

@@ -1,0 +1,226 @@
+//! Builds and runs the C and C++ programs in `c_tests/` against the library built by cargo.
+//!
+//! The programs link `libbingham.a` (plus the system libraries Rust's standard library needs)
+//! that cargo built for this very test run (in `target/<profile>/deps/`, next to this test's
+//! own executable); one program links `libbingham.so` instead. If the library is missing there,
+//! the harness falls back to `target/<profile>/` and, failing that, builds it with cargo. Compilers come from the
+//! `cc` crate (honouring `CC`, `CXX`, `CFLAGS`, … as usual). The C++ reference test needs Eigen 3
+//! (`libeigen3-dev`, found in `/usr/include/eigen3` or via `EIGEN3_INCLUDE_DIR`).
+//!
+//! Every program counts its checks and exits non-zero on any failure; its output is shown.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+const STRICT: &[&str] = &["-Wall", "-Wextra", "-Werror", "-pedantic"];
+
+/// `target/<profile>/`, from `target/<profile>/deps/c_tests-<hash>`.
+fn profile_dir() -> PathBuf {
+    let exe = std::env::current_exe().expect("current_exe");
+    exe.parent()
+        .and_then(Path::parent)
+        .expect("test executable lives in target/<profile>/deps")
+        .to_path_buf()
+}
+
+/// The directory holding `libbingham.a` and `libbingham.so`.
+///
+/// `cargo test` builds every crate type of the library into `target/<profile>/deps/` (next to
+/// this test's executable) but does not copy them up to `target/<profile>/`; prefer those fresh
+/// copies, then `target/<profile>/`, and as a last resort build the library with cargo.
+fn lib_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let have = |d: &Path| d.join("libbingham.a").is_file() && d.join("libbingham.so").is_file();
+        let deps = std::env::current_exe()
+            .expect("current_exe")
+            .parent()
+            .expect("deps dir")
+            .to_path_buf();
+        if have(&deps) {
+            return deps;
+        }
+        let dir = profile_dir();
+        if !have(&dir) {
+            let release = dir.file_name().is_some_and(|n| n == "release");
+            let target_dir = dir.parent().expect("target dir");
+            let mut cmd = Command::new(env!("CARGO"));
+            cmd.args(["build", "--lib", "--manifest-path"])
+                .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml"))
+                .env("CARGO_TARGET_DIR", target_dir);
+            if release {
+                cmd.arg("--release");
+            }
+            let status = cmd.status().expect("run cargo build");
+            assert!(status.success(), "cargo build of the library failed");
+        }
+        assert!(
+            have(&dir),
+            "libbingham.a/.so not found in {}",
+            dir.display()
+        );
+        dir
+    })
+}
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn out_dir() -> PathBuf {
+    let d = profile_dir().join("c_tests");
+    std::fs::create_dir_all(&d).expect("create c_tests output dir");
+    d
+}
+
+fn eigen_include() -> PathBuf {
+    if let Some(p) = std::env::var_os("EIGEN3_INCLUDE_DIR") {
+        return PathBuf::from(p);
+    }
+    for p in ["/usr/include/eigen3", "/usr/local/include/eigen3"] {
+        if Path::new(p).join("Eigen/Dense").is_file() {
+            return PathBuf::from(p);
+        }
+    }
+    panic!("Eigen 3 not found: install libeigen3-dev (`make test` does) or set EIGEN3_INCLUDE_DIR");
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Link {
+    Static,
+    Shared,
+}
+
+/// Compiles `c_tests/<source>` to an executable named `<name>` and returns its path.
+fn build(source: &str, name: &str, std: &str, extra: &[&str], link: Link) -> PathBuf {
+    let cpp = source.ends_with(".cpp");
+    let compiler = cc::Build::new()
+        .cargo_metadata(false)
+        .cargo_warnings(false)
+        .cargo_debug(false)
+        .emit_rerun_if_env_changed(false)
+        .target(env!("BINGHAM_BUILD_TARGET"))
+        .host(env!("BINGHAM_BUILD_HOST"))
+        .opt_level(2)
+        .debug(false)
+        .cpp(cpp)
+        .try_get_compiler()
+        .expect("find a C/C++ compiler");
+    let exe = out_dir().join(name);
+    let lib = lib_dir();
+    let mut cmd = compiler.to_command();
+    cmd.arg(format!("-std={std}"))
+        .args(STRICT)
+        .arg("-I")
+        .arg(root().join("include"))
+        .arg("-I")
+        .arg(root().join("c_tests"))
+        .args(extra)
+        .arg(root().join("c_tests").join(source))
+        .arg("-o")
+        .arg(&exe);
+    match link {
+        // What `pkg-config --static --libs bingham` gives: the archive and Rust std's needs.
+        Link::Static => {
+            cmd.arg(lib.join("libbingham.a"))
+                .args(["-lpthread", "-ldl", "-lm"]);
+        }
+        // The library's SONAME is libbingham.so.<major>: provide that name next to the program.
+        Link::Shared => {
+            let dir = out_dir().join("shared");
+            std::fs::create_dir_all(&dir).expect("create dir");
+            let soname = dir.join(format!("libbingham.so.{}", env!("CARGO_PKG_VERSION_MAJOR")));
+            let _ = std::fs::remove_file(&soname);
+            std::os::unix::fs::symlink(lib.join("libbingham.so"), &soname).expect("symlink");
+            cmd.arg("-L")
+                .arg(lib)
+                .arg(format!("-Wl,-rpath,{}", dir.display()))
+                .args(["-lbingham", "-lpthread", "-lm"]);
+        }
+    }
+    let output = cmd.output().expect("run the compiler");
+    let shown: Vec<_> = std::iter::once(cmd.get_program())
+        .chain(cmd.get_args())
+        .map(|a| a.to_string_lossy())
+        .collect();
+    assert!(
+        output.status.success(),
+        "compiling {source} failed:\n{}\n{}{}",
+        shown.join(" "),
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    exe
+}
+
+fn run(exe: &Path) {
+    let output = Command::new(exe).output().expect("run test program");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    print!("{stdout}");
+    eprint!("{stderr}");
+    assert!(
+        output.status.success(),
+        "{} failed ({}):\n{stdout}{stderr}",
+        exe.display(),
+        output.status
+    );
+}
+
+#[test]
+fn header_compiles_as_c99() {
+    let exe = build(
+        "header_c99.c",
+        "header_c99",
+        "c99",
+        &["-Wstrict-prototypes", "-Wmissing-prototypes", "-Wshadow"],
+        Link::Static,
+    );
+    run(&exe);
+}
+
+#[test]
+fn header_compiles_as_cxx11() {
+    let exe = build(
+        "header_cxx11.cpp",
+        "header_cxx11",
+        "c++11",
+        &["-Wshadow"],
+        Link::Static,
+    );
+    run(&exe);
+}
+
+#[test]
+fn header_works_with_the_shared_library() {
+    let exe = build(
+        "header_c99.c",
+        "header_c99_shared",
+        "c99",
+        &[],
+        Link::Shared,
+    );
+    run(&exe);
+}
+
+#[test]
+fn c_api_errors_and_success_paths() {
+    let exe = build("api_errors.c", "api_errors", "c99", &[], Link::Static);
+    run(&exe);
+}
+
+#[test]
+fn cpp_eigen_references() {
+    let inc = eigen_include();
+    let inc = inc.to_str().expect("UTF-8 path");
+    // Eigen itself is not -pedantic/-Wextra clean on every compiler: include it as a system header.
+    let exe = build(
+        "reference_eigen.cpp",
+        "reference_eigen",
+        "c++11",
+        &["-isystem", inc],
+        Link::Static,
+    );
+    run(&exe);
+}
