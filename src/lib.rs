@@ -10,9 +10,17 @@
 //! adding `c·I` to `Z` does not change the distribution).
 //! Quaternions are scalar first, `(w, x, y, z)`.
 
+pub mod distribution;
 pub mod error;
+mod linalg;
 pub mod ffi;
+pub mod mle;
 pub mod normalization;
+pub mod quaternion;
+mod sample;
 pub mod special;
 
+pub use distribution::Bingham;
 pub use error::{Error, Result, MAX_DIM, MIN_DIM};
+pub use mle::{mle_from_samples, mle_from_second_moment};
+pub use normalization::{log_normalization, Method};

@@ -7,6 +7,7 @@
 //! `log F` is `∂ω_i/∂z_j = Cov(x_i², x_j²)`.
 
 mod d2;
+mod gauss;
 mod general;
 mod quad;
 mod saddlepoint;
@@ -66,10 +67,14 @@ pub fn log_normalization_into(
     check_dim(d)?;
     check_finite("z", z)?;
     if grad.as_ref().is_some_and(|g| g.len() != d) {
-        return Err(Error::InvalidDimension("gradient buffer length must be d".into()));
+        return Err(Error::InvalidDimension(
+            "gradient buffer length must be d".into(),
+        ));
     }
     if hess.as_ref().is_some_and(|h| h.len() != d * d) {
-        return Err(Error::InvalidDimension("Hessian buffer length must be d*d".into()));
+        return Err(Error::InvalidDimension(
+            "Hessian buffer length must be d*d".into(),
+        ));
     }
     // Sort ascending, remembering where each sorted entry came from.
     let mut perm = [0usize; MAX_DIM];
@@ -108,7 +113,9 @@ pub fn log_normalization_into(
     }
     let log_f = log_f + shift;
     if !log_f.is_finite() {
-        return Err(Error::Numerical(format!("log F is not finite for z = {z:?}")));
+        return Err(Error::Numerical(format!(
+            "log F is not finite for z = {z:?}"
+        )));
     }
     Ok(log_f)
 }
@@ -123,7 +130,11 @@ pub fn evaluate(z: &[f64], method: Method, hessian: bool) -> Result<LogNormaliza
     let d = z.len();
     check_dim(d)?;
     let mut grad = vec![0.0; d];
-    let mut hess = if hessian { vec![0.0; d * d] } else { Vec::new() };
+    let mut hess = if hessian {
+        vec![0.0; d * d]
+    } else {
+        Vec::new()
+    };
     let log_f = log_normalization_into(
         z,
         method,
