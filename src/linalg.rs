@@ -9,16 +9,39 @@ use nalgebra::{DMatrix, DVector};
 /// triangle is read). Not sorted.
 pub(crate) fn jacobi_eigen(a: &DMatrix<f64>) -> (DVector<f64>, DMatrix<f64>) {
     let n = a.nrows();
-    let mut m = a.clone();
-    let mut v = DMatrix::<f64>::identity(n, n);
-    let mut d = DVector::from_fn(n, |i, _| a[(i, i)]);
-    let mut b = d.clone();
-    let mut z = DVector::<f64>::zeros(n);
+    // row-major scratch; `a` is symmetric so the layout does not matter for reading
+    let mut m: Vec<f64> = a.transpose().as_slice().to_vec();
+    let mut v = vec![0.0; n * n];
+    let mut d = vec![0.0; n];
+    let mut work = vec![0.0; 2 * n];
+    jacobi_in_place(n, &mut m, &mut v, &mut d, &mut work);
+    (DVector::from_vec(d), DMatrix::from_row_slice(n, n, &v))
+}
+
+/// Allocation-free cyclic Jacobi on caller buffers: `m` (n×n row-major, upper triangle read,
+/// destroyed), `v` (n×n row-major, receives the eigenvectors as columns), `d` (n, eigenvalues),
+/// `work` (2n scratch).
+pub(crate) fn jacobi_in_place(
+    n: usize,
+    m: &mut [f64],
+    v: &mut [f64],
+    d: &mut [f64],
+    work: &mut [f64],
+) {
+    let (b, z) = work.split_at_mut(n);
+    for i in 0..n {
+        for j in 0..n {
+            v[i * n + j] = if i == j { 1.0 } else { 0.0 };
+        }
+        d[i] = m[i * n + i];
+        b[i] = d[i];
+        z[i] = 0.0;
+    }
     for sweep in 0..100 {
         let mut sm = 0.0;
         for p in 0..n {
             for q in p + 1..n {
-                sm += m[(p, q)].abs();
+                sm += m[p * n + q].abs();
             }
         }
         if sm == 0.0 {
@@ -31,10 +54,10 @@ pub(crate) fn jacobi_eigen(a: &DMatrix<f64>) -> (DVector<f64>, DMatrix<f64>) {
         };
         for p in 0..n {
             for q in p + 1..n {
-                let apq = m[(p, q)];
+                let apq = m[p * n + q];
                 let g = 100.0 * apq.abs();
                 if sweep > 3 && d[p].abs() + g == d[p].abs() && d[q].abs() + g == d[q].abs() {
-                    m[(p, q)] = 0.0;
+                    m[p * n + q] = 0.0;
                 } else if apq.abs() > tresh {
                     let h = d[q] - d[p];
                     let t = if h.abs() + g == h.abs() {
@@ -56,33 +79,34 @@ pub(crate) fn jacobi_eigen(a: &DMatrix<f64>) -> (DVector<f64>, DMatrix<f64>) {
                     z[q] += h;
                     d[p] -= h;
                     d[q] += h;
-                    m[(p, q)] = 0.0;
-                    let rot = |m: &mut DMatrix<f64>, i: usize, j: usize, k: usize, l: usize| {
-                        let g = m[(i, j)];
-                        let h = m[(k, l)];
-                        m[(i, j)] = g - s * (h + g * tau);
-                        m[(k, l)] = h + s * (g - h * tau);
+                    m[p * n + q] = 0.0;
+                    let rot = |m: &mut [f64], i: usize, k: usize| {
+                        let g = m[i];
+                        let h = m[k];
+                        m[i] = g - s * (h + g * tau);
+                        m[k] = h + s * (g - h * tau);
                     };
                     for j in 0..p {
-                        rot(&mut m, j, p, j, q);
+                        rot(m, j * n + p, j * n + q);
                     }
                     for j in p + 1..q {
-                        rot(&mut m, p, j, j, q);
+                        rot(m, p * n + j, j * n + q);
                     }
                     for j in q + 1..n {
-                        rot(&mut m, p, j, q, j);
+                        rot(m, p * n + j, q * n + j);
                     }
                     for j in 0..n {
-                        rot(&mut v, j, p, j, q);
+                        rot(v, j * n + p, j * n + q);
                     }
                 }
             }
         }
-        b += &z;
-        d.copy_from(&b);
-        z.fill(0.0);
+        for i in 0..n {
+            b[i] += z[i];
+            d[i] = b[i];
+            z[i] = 0.0;
+        }
     }
-    (d, v)
 }
 
 #[cfg(test)]
@@ -104,7 +128,9 @@ mod tests {
             for _ in 0..300 {
                 let g = DMatrix::from_fn(n, n, |_, _| r());
                 let q = g.qr().q();
-                let w = DVector::from_fn(n, |i, _| 0.5 + 1e-3 * i as f64 + if i == 0 { -0.499 } else { 0.0 });
+                let w = DVector::from_fn(n, |i, _| {
+                    0.5 + 1e-3 * i as f64 + if i == 0 { -0.499 } else { 0.0 }
+                });
                 let a = &q * DMatrix::from_diagonal(&w) * q.transpose();
                 let a = (&a + a.transpose()) * 0.5;
                 let (vals, vecs) = jacobi_eigen(&a);

@@ -96,8 +96,16 @@ pub fn log_normalization_into(
     let log_f = match hess {
         None => eval(zs, want_grad.then_some(&mut gs[..d]), None)?,
         Some(h) => {
-            let mut hs = vec![0.0f64; d * d];
-            let lf = eval(zs, Some(&mut gs[..d]), Some(&mut hs))?;
+            // no heap allocation for d ≤ 4 (the filter's hot path)
+            let mut small = [0.0f64; 16];
+            let mut big = Vec::new();
+            let hs: &mut [f64] = if d <= 4 {
+                &mut small[..d * d]
+            } else {
+                big.resize(d * d, 0.0);
+                &mut big
+            };
+            let lf = eval(zs, Some(&mut gs[..d]), Some(&mut *hs))?;
             for a in 0..d {
                 for b in 0..d {
                     h[perm[a] * d + perm[b]] = hs[a * d + b];
