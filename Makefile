@@ -1,0 +1,114 @@
+# bingham -- build, demo, test and install.
+#
+#   make demo                    build the library, then build and run the C/C++ examples
+#   make test                    everything CI runs (installs missing tools first, see `deps`)
+#   make install PREFIX=/opt/x   shared + static library, header, pkg-config file
+#   make header                  regenerate include/bingham.h from src/ffi/ (commit the result)
+#
+# Uses cargo's default target directory (target/), or CARGO_TARGET_DIR if set.
+
+SHELL := /bin/bash
+.DEFAULT_GOAL := build
+
+CARGO ?= cargo
+PYTHON ?= python3
+CC ?= cc
+CXX ?= c++
+PREFIX ?= /usr/local
+LIBDIR ?= $(PREFIX)/lib
+INCLUDEDIR ?= $(PREFIX)/include
+DESTDIR ?=
+
+VERSION := $(shell sed -n 's/^version *= *"\([^"]*\)".*/\1/p' Cargo.toml | head -n 1)
+MAJOR := $(firstword $(subst ., ,$(VERSION)))
+TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
+RELEASE := $(TARGET_DIR)/release
+DEMO_DIR := $(TARGET_DIR)/demo
+# pkg-config file: paths below the prefix are written relative to ${prefix}
+PC_LIBDIR := $(patsubst $(PREFIX)/%,$${prefix}/%,$(LIBDIR))
+PC_INCLUDEDIR := $(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))
+# what a program linking libbingham.a needs besides the archive (Rust's standard library)
+STATIC_LIBS := -lpthread -ldl -lm
+SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
+
+.PHONY: build header demo test deps fmt-check clippy rust-test python-test install install-test \
+        uninstall clean
+
+build:
+	$(CARGO) build --release --lib
+
+header:
+	BINGHAM_WRITE_HEADER=1 $(CARGO) test --release --test header
+
+demo: build
+	@mkdir -p $(DEMO_DIR)
+	@set -e; for src in examples/c/*.c examples/c/*.cpp; do \
+	  [ -e "$$src" ] || continue; \
+	  exe=$(DEMO_DIR)/$$(basename "$${src%.*}"); \
+	  case "$$src" in \
+	    *.c)   $(CC) -std=c99 -O2 -Wall -Wextra -Werror -pedantic -Iinclude "$$src" \
+	             $(RELEASE)/libbingham.a $(STATIC_LIBS) -o "$$exe" ;; \
+	    *.cpp) $(CXX) -std=c++11 -O2 -Wall -Wextra -Werror -pedantic -Iinclude "$$src" \
+	             $(RELEASE)/libbingham.a $(STATIC_LIBS) -o "$$exe" ;; \
+	  esac; \
+	  echo "==== $$src"; "$$exe"; echo; \
+	done
+
+# --- tests ---------------------------------------------------------------------------------
+
+test: deps fmt-check clippy build rust-test python-test install-test
+	@echo "make test: all passed"
+
+# Installs what the tests need when it is missing (Debian/Ubuntu): a C++ compiler, Eigen,
+# pkg-config, and NumPy/pytest for the Python binding.
+deps:
+	@missing=""; \
+	command -v $(CXX) >/dev/null 2>&1 || missing="$$missing g++"; \
+	[ -f /usr/include/eigen3/Eigen/Dense ] || [ -n "$$EIGEN3_INCLUDE_DIR" ] || missing="$$missing libeigen3-dev"; \
+	command -v pkg-config >/dev/null 2>&1 || missing="$$missing pkg-config"; \
+	command -v readelf >/dev/null 2>&1 || missing="$$missing binutils"; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing:$$missing"; \
+	  $(SUDO) apt-get update && $(SUDO) apt-get install -y $$missing; \
+	fi
+	@$(PYTHON) -c 'import numpy, pytest' 2>/dev/null || $(PYTHON) -m pip install numpy pytest
+
+fmt-check:
+	$(CARGO) fmt --check
+
+clippy:
+	$(CARGO) clippy --all-targets -- -D warnings
+
+# The Rust tests, the C/C++ tests (tests/c_tests.rs) and the header check (tests/header.rs).
+rust-test:
+	$(CARGO) test --release
+
+python-test: build
+	cd examples/python && BINGHAM_LIB=$(abspath $(RELEASE))/libbingham.so $(PYTHON) -m pytest -q -p no:cacheprovider
+
+# Installs into a temporary prefix and builds/runs a C++11 program against it via pkg-config.
+install-test: build
+	MAKE="$(MAKE)" CXX="$(CXX)" CC="$(CC)" scripts/install-test.sh
+
+# --- install -------------------------------------------------------------------------------
+
+install:
+	@test -f $(RELEASE)/libbingham.so -a -f $(RELEASE)/libbingham.a || $(MAKE) --no-print-directory build
+	install -d $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(INCLUDEDIR)
+	install -m 644 include/bingham.h $(DESTDIR)$(INCLUDEDIR)/bingham.h
+	install -m 644 $(RELEASE)/libbingham.a $(DESTDIR)$(LIBDIR)/libbingham.a
+	install -m 755 $(RELEASE)/libbingham.so $(DESTDIR)$(LIBDIR)/libbingham.so.$(VERSION)
+	ln -sf libbingham.so.$(VERSION) $(DESTDIR)$(LIBDIR)/libbingham.so.$(MAJOR)
+	ln -sf libbingham.so.$(MAJOR) $(DESTDIR)$(LIBDIR)/libbingham.so
+	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBDIR@|$(PC_LIBDIR)|g' \
+	    -e 's|@INCLUDEDIR@|$(PC_INCLUDEDIR)|g' -e 's|@VERSION@|$(VERSION)|g' \
+	    bingham.pc.in > $(DESTDIR)$(LIBDIR)/pkgconfig/bingham.pc
+	@echo "installed bingham $(VERSION) into $(DESTDIR)$(PREFIX)"
+
+uninstall:
+	rm -f $(DESTDIR)$(INCLUDEDIR)/bingham.h $(DESTDIR)$(LIBDIR)/libbingham.a \
+	      $(DESTDIR)$(LIBDIR)/libbingham.so $(DESTDIR)$(LIBDIR)/libbingham.so.$(MAJOR) \
+	      $(DESTDIR)$(LIBDIR)/libbingham.so.$(VERSION) $(DESTDIR)$(LIBDIR)/pkgconfig/bingham.pc
+
+clean:
+	$(CARGO) clean

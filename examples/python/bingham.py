@@ -1,0 +1,405 @@
+"""ctypes binding of the bingham C library (Bingham distributions on spheres).
+
+Every function of ``include/bingham.h`` is bound with its argument and result types
+(``lib()`` returns the configured ``ctypes.CDLL``); the Python functions below take and return
+NumPy arrays and raise :class:`BinghamError` on any status other than ``BINGHAM_OK``.
+
+Conventions (the same as in C and Rust):
+
+* ``f(x) = exp(xᵀ M Z Mᵀ x) / F(Z)`` on the unit sphere S^{d-1}, F with respect to the surface
+  measure (F(0) = 2π, 4π, 2π² for d = 2, 3, 4); d = 2..64.
+* ``m``: d×d orthogonal, columns are the principal directions, the last column is the mode.
+* ``z``: length d, any order and shift on input; outputs sorted ascending with ``z[-1] == 0``.
+* Quaternions are scalar first ``(w, x, y, z)``; complex numbers are ``(re, im)``.
+
+The library is found via the environment variable ``BINGHAM_LIB`` (path of ``libbingham.so``),
+else in ``../../target/release`` or ``../../target/debug`` relative to this file, else by the
+system's library search (``libbingham.so.0`` installed by ``make install``).
+
+Thread safety: the library is thread-safe; the error message read by :class:`BinghamError` is
+per thread, so exceptions carry the message of their own call.
+"""
+
+import ctypes
+import ctypes.util
+import enum
+import os
+
+import numpy as np
+
+__all__ = [
+    "BinghamError",
+    "Status",
+    "MIN_DIM",
+    "MAX_DIM",
+    "ORTHOGONALITY_TOL",
+    "UNIT_TOL",
+    "lib",
+    "version",
+    "status_str",
+    "last_error_message",
+    "normalization_constant",
+    "log_normalization_constant",
+    "log_normalization_constant_saddlepoint",
+    "log_normalization_hessian",
+    "second_moment",
+    "mle",
+    "mle_samples",
+    "multiply",
+    "compose",
+    "pdf",
+    "log_pdf",
+    "entropy",
+    "kl_divergence",
+    "sample",
+    "rotate_left",
+    "rotate_right",
+    "mode",
+]
+
+MIN_DIM = 2
+MAX_DIM = 64
+ORTHOGONALITY_TOL = 1e-6
+UNIT_TOL = 1e-6
+
+
+class Status(enum.IntEnum):
+    """The values of ``bingham_status`` (stable; new codes are only appended)."""
+
+    OK = 0
+    ERR_NULL_ARGUMENT = 1
+    ERR_INVALID_DIMENSION = 2
+    ERR_INVALID_ARGUMENT = 3
+    ERR_NOT_CONVERGED = 4
+    ERR_NUMERICAL = 5
+    ERR_PANIC = 6
+
+
+class BinghamError(Exception):
+    """A call returned a status other than ``BINGHAM_OK``.
+
+    Attributes: ``status`` (int, a :class:`Status` value when known), ``status_name`` (the
+    library's ``bingham_status_str``) and ``message`` (the library's last error message).
+    """
+
+    def __init__(self, status, message):
+        self.status = Status(status) if status in Status._value2member_map_ else status
+        self.status_name = status_str(status)
+        self.message = message
+        super().__init__(f"{self.status_name} ({int(status)}): {message}")
+
+
+_D = ctypes.POINTER(ctypes.c_double)
+_SIZE = ctypes.c_size_t
+_STATUS = ctypes.c_int
+
+# name -> (restype, argtypes), in the order of the header.
+_SIGNATURES = {
+    "bingham_version": (ctypes.c_char_p, []),
+    "bingham_status_str": (ctypes.c_char_p, [ctypes.c_int]),
+    "bingham_last_error_message": (
+        _STATUS,
+        [ctypes.c_char_p, _SIZE, ctypes.POINTER(_SIZE)],
+    ),
+    "bingham_normalization_constant": (_STATUS, [_SIZE, _D, _D, _D]),
+    "bingham_log_normalization_constant": (_STATUS, [_SIZE, _D, _D, _D]),
+    "bingham_log_normalization_constant_saddlepoint": (_STATUS, [_SIZE, _D, _D, _D]),
+    "bingham_log_normalization_hessian": (_STATUS, [_SIZE, _D, _D, _D, _D]),
+    "bingham_second_moment": (_STATUS, [_SIZE, _D, _D, _D]),
+    "bingham_mle": (_STATUS, [_SIZE, _D, _D, _D]),
+    "bingham_mle_samples": (_STATUS, [_SIZE, _SIZE, _D, _D, _D, _D]),
+    "bingham_multiply": (_STATUS, [_SIZE, _D, _D, _D, _D, _D, _D]),
+    "bingham_compose": (_STATUS, [_SIZE, _D, _D, _D, _D, _D, _D]),
+    "bingham_pdf": (_STATUS, [_SIZE, _D, _D, _SIZE, _D, _D]),
+    "bingham_log_pdf": (_STATUS, [_SIZE, _D, _D, _SIZE, _D, _D]),
+    "bingham_entropy": (_STATUS, [_SIZE, _D, _D, _D]),
+    "bingham_kl_divergence": (_STATUS, [_SIZE, _D, _D, _D, _D, _D]),
+    "bingham_sample": (_STATUS, [_SIZE, _D, _D, ctypes.c_uint64, _SIZE, _D]),
+    "bingham_rotate_left": (_STATUS, [_SIZE, _D, _D, _D, _D, _D]),
+    "bingham_rotate_right": (_STATUS, [_SIZE, _D, _D, _D, _D, _D]),
+    "bingham_mode": (_STATUS, [_SIZE, _D, _D, _D]),
+}
+
+
+def _candidates():
+    env = os.environ.get("BINGHAM_LIB")
+    if env:
+        yield env
+        return
+    here = os.path.dirname(os.path.abspath(__file__))
+    for profile in ("release", "debug"):
+        yield os.path.join(here, "..", "..", "target", profile, "libbingham.so")
+    found = ctypes.util.find_library("bingham")
+    if found:
+        yield found
+    yield "libbingham.so.0"
+
+
+def _load():
+    errors = []
+    for path in _candidates():
+        if os.sep in path and not os.path.exists(path):
+            errors.append(f"{path}: not found")
+            continue
+        try:
+            cdll = ctypes.CDLL(path)
+        except OSError as e:
+            errors.append(f"{path}: {e}")
+            continue
+        for name, (restype, argtypes) in _SIGNATURES.items():
+            fn = getattr(cdll, name)
+            fn.restype = restype
+            fn.argtypes = argtypes
+        return cdll
+    raise OSError(
+        "cannot load libbingham (set BINGHAM_LIB, or build with `cargo build --release`): "
+        + "; ".join(errors)
+    )
+
+
+_LIB = None
+
+
+def lib():
+    """The loaded ``ctypes.CDLL`` with ``argtypes``/``restype`` set for every function."""
+    global _LIB
+    if _LIB is None:
+        _LIB = _load()
+    return _LIB
+
+
+# ---- helpers ---------------------------------------------------------------------------------
+
+
+def _in(a, name, shape=None):
+    """A C-contiguous float64 copy-or-view of `a`, shape-checked (the C side trusts lengths)."""
+    arr = np.ascontiguousarray(a, dtype=np.float64)
+    if shape is not None and arr.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
+    return arr
+
+
+def _ptr(arr):
+    return None if arr is None else arr.ctypes.data_as(_D)
+
+
+def _check(status):
+    if status != Status.OK:
+        raise BinghamError(status, last_error_message())
+
+
+def _vec(z, name="z"):
+    z = _in(z, name)
+    if z.ndim != 1:
+        raise ValueError(f"{name} must be a vector, got shape {z.shape}")
+    return z.shape[0], z
+
+
+def _dist(m, z, names=("m", "z")):
+    d, z = _vec(z, names[1])
+    return d, _in(m, names[0], (d, d)), z
+
+
+def _points(x, d):
+    x = _in(x, "x")
+    single = x.ndim == 1
+    x2 = x.reshape(1, -1) if single else x
+    if x2.ndim != 2 or x2.shape[1] != d:
+        raise ValueError(f"x must have shape (n, {d}) or ({d},), got {x.shape}")
+    return np.ascontiguousarray(x2), single
+
+
+# ---- the API ---------------------------------------------------------------------------------
+
+
+def version():
+    """The library version string, e.g. ``"0.1.0"``."""
+    return lib().bingham_version().decode()
+
+
+def status_str(status):
+    """The library's static description of a status code (any int)."""
+    return lib().bingham_status_str(int(status)).decode()
+
+
+def last_error_message():
+    """This thread's last error message ('' if no call failed yet)."""
+    n = _SIZE(0)
+    _check_raw(lib().bingham_last_error_message(None, 0, ctypes.byref(n)))
+    buf = ctypes.create_string_buffer(n.value + 1)
+    _check_raw(lib().bingham_last_error_message(buf, len(buf), ctypes.byref(n)))
+    return buf.value.decode("utf-8", errors="replace")
+
+
+def _check_raw(status):
+    if status != Status.OK:  # only possible on misuse; do not recurse into last_error_message
+        raise BinghamError(status, "bingham_last_error_message failed")
+
+
+def normalization_constant(z):
+    """``(F, dF/dz)`` for concentrations ``z`` (any order/shift); F with the surface measure.
+
+    Raises BinghamError (ERR_NUMERICAL) when F overflows a double: use the log version.
+    """
+    d, z = _vec(z)
+    f = np.empty(1)
+    df = np.empty(d)
+    _check(lib().bingham_normalization_constant(d, _ptr(z), _ptr(f), _ptr(df)))
+    return float(f[0]), df
+
+
+def _log_norm(fn, z):
+    d, z = _vec(z)
+    lf = np.empty(1)
+    g = np.empty(d)
+    _check(fn(d, _ptr(z), _ptr(lf), _ptr(g)))
+    return float(lf[0]), g
+
+
+def log_normalization_constant(z):
+    """``(log F, d log F/dz)``; the gradient is E[x_i²] in the principal frame (sums to 1)."""
+    return _log_norm(lib().bingham_log_normalization_constant, z)
+
+
+def log_normalization_constant_saddlepoint(z):
+    """APPROXIMATE ``(log F, d log F/dz)`` by the saddlepoint method (errors ~1e-3..5e-2)."""
+    return _log_norm(lib().bingham_log_normalization_constant_saddlepoint, z)
+
+
+def log_normalization_hessian(z):
+    """``(log F, gradient, Hessian)`` of log F, in the order of the input ``z``."""
+    d, z = _vec(z)
+    lf = np.empty(1)
+    g = np.empty(d)
+    h = np.empty((d, d))
+    _check(lib().bingham_log_normalization_hessian(d, _ptr(z), _ptr(lf), _ptr(g), _ptr(h)))
+    return float(lf[0]), g, h
+
+
+def second_moment(m, z):
+    """``S = E[x xᵀ]`` (d×d, trace 1) of Bingham(m, z)."""
+    d, m, z = _dist(m, z)
+    s = np.empty((d, d))
+    _check(lib().bingham_second_moment(d, _ptr(m), _ptr(z), _ptr(s)))
+    return s
+
+
+def mle(s):
+    """Moment-matching / maximum-likelihood ``(m, z)`` for a second-moment matrix ``s``."""
+    s = _in(s, "s")
+    if s.ndim != 2 or s.shape[0] != s.shape[1]:
+        raise ValueError(f"s must be square, got shape {s.shape}")
+    d = s.shape[0]
+    m = np.empty((d, d))
+    z = np.empty(d)
+    _check(lib().bingham_mle(d, _ptr(s), _ptr(m), _ptr(z)))
+    return m, z
+
+
+def mle_samples(x, w=None):
+    """Maximum-likelihood ``(m, z)`` for unit vectors ``x`` (n×d), optional weights ``w`` (n)."""
+    x = _in(x, "x")
+    if x.ndim != 2:
+        raise ValueError(f"x must have shape (n, d), got {x.shape}")
+    n, d = x.shape
+    if w is not None:
+        w = _in(w, "w", (n,))
+    m = np.empty((d, d))
+    z = np.empty(d)
+    _check(lib().bingham_mle_samples(d, n, _ptr(x), _ptr(w), _ptr(m), _ptr(z)))
+    return m, z
+
+
+def _binary(fn, m1, z1, m2, z2):
+    d, m1, z1 = _dist(m1, z1, ("m1", "z1"))
+    m2 = _in(m2, "m2", (d, d))
+    z2 = _in(z2, "z2", (d,))
+    m = np.empty((d, d))
+    z = np.empty(d)
+    _check(fn(d, _ptr(m1), _ptr(z1), _ptr(m2), _ptr(z2), _ptr(m), _ptr(z)))
+    return m, z
+
+
+def multiply(m1, z1, m2, z2):
+    """Product of two Bingham densities (Bayes update), ``(m, z)``; exact."""
+    return _binary(lib().bingham_multiply, m1, z1, m2, z2)
+
+
+def compose(m1, z1, m2, z2):
+    """Moment-matched distribution of ``x ⊕ y`` (d = 2: complex, d = 4: quaternion product)."""
+    return _binary(lib().bingham_compose, m1, z1, m2, z2)
+
+
+def _pointwise(fn, m, z, x):
+    d, m, z = _dist(m, z)
+    x, single = _points(x, d)
+    n = x.shape[0]
+    p = np.empty(n)
+    _check(fn(d, _ptr(m), _ptr(z), n, _ptr(x), _ptr(p)))
+    return float(p[0]) if single else p
+
+
+def pdf(m, z, x):
+    """Density at unit vector(s) ``x`` ((d,) → float, (n, d) → array), surface measure."""
+    return _pointwise(lib().bingham_pdf, m, z, x)
+
+
+def log_pdf(m, z, x):
+    """Log density at unit vector(s) ``x``."""
+    return _pointwise(lib().bingham_log_pdf, m, z, x)
+
+
+def entropy(m, z):
+    """Differential entropy in nats (w.r.t. the surface measure)."""
+    d, m, z = _dist(m, z)
+    h = np.empty(1)
+    _check(lib().bingham_entropy(d, _ptr(m), _ptr(z), _ptr(h)))
+    return float(h[0])
+
+
+def kl_divergence(m1, z1, m2, z2):
+    """``KL(p1 ‖ p2)`` in nats."""
+    d, m1, z1 = _dist(m1, z1, ("m1", "z1"))
+    m2 = _in(m2, "m2", (d, d))
+    z2 = _in(z2, "z2", (d,))
+    kl = np.empty(1)
+    _check(lib().bingham_kl_divergence(d, _ptr(m1), _ptr(z1), _ptr(m2), _ptr(z2), _ptr(kl)))
+    return float(kl[0])
+
+
+def sample(m, z, n, seed=0):
+    """``n`` samples (n×d unit vectors); deterministic in ``seed`` for a given library version."""
+    d, m, z = _dist(m, z)
+    n = int(n)
+    if n < 0:
+        raise ValueError("n must be >= 0")
+    x = np.empty((n, d))
+    _check(lib().bingham_sample(d, _ptr(m), _ptr(z), int(seed) & (2**64 - 1), n, _ptr(x)))
+    return x
+
+
+def _rotate(fn, m, z, u):
+    d, m, z = _dist(m, z)
+    u = _in(u, "u", (d,))
+    mo = np.empty((d, d))
+    zo = np.empty(d)
+    _check(fn(d, _ptr(m), _ptr(z), _ptr(u), _ptr(mo), _ptr(zo)))
+    return mo, zo
+
+
+def rotate_left(m, z, u):
+    """Distribution of ``u ⊕ x`` for a fixed unit ``u`` (d = 2, 4), ``(m, z)``."""
+    return _rotate(lib().bingham_rotate_left, m, z, u)
+
+
+def rotate_right(m, z, u):
+    """Distribution of ``x ⊕ u`` for a fixed unit ``u`` (d = 2, 4), ``(m, z)``."""
+    return _rotate(lib().bingham_rotate_right, m, z, u)
+
+
+def mode(m, z):
+    """The mode (a unit vector; ``-mode`` is equally a mode)."""
+    d, m, z = _dist(m, z)
+    out = np.empty(d)
+    _check(lib().bingham_mode(d, _ptr(m), _ptr(z), _ptr(out)))
+    return out
