@@ -1,1 +1,66 @@
-fn main() {}
+//! log F + gradient across the range (criterion). Targets: d = 2 ≤ 100 ns, d = 4 ≤ 5 µs.
+
+use bingham::normalization::{log_normalization_into, Method};
+use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
+
+fn cases(d: usize) -> Vec<(&'static str, Vec<f64>)> {
+    match d {
+        2 => vec![
+            ("uniform", vec![0.0, 0.0]),
+            ("z=-1", vec![-1.0, 0.0]),
+            ("z=-100", vec![-100.0, 0.0]),
+            ("z=-1e4", vec![-1e4, 0.0]),
+            ("z=-1e6", vec![-1e6, 0.0]),
+        ],
+        3 => vec![
+            ("uniform", vec![0.0, 0.0, 0.0]),
+            ("(-10,-1,0)", vec![-10.0, -1.0, 0.0]),
+            ("(-1e3,-1e2,0)", vec![-1e3, -1e2, 0.0]),
+            ("(-1e6,-10,0)", vec![-1e6, -10.0, 0.0]),
+            ("(-1e6,-1e6,0)", vec![-1e6, -1e6, 0.0]),
+        ],
+        _ => vec![
+            ("uniform", vec![0.0; 4]),
+            ("(-1,-1,-1,0)", vec![-1.0, -1.0, -1.0, 0.0]),
+            ("(-200,-200,-2,0)", vec![-200.0, -200.0, -2.0, 0.0]),
+            ("(-1e4,-1e3,-1e2,0)", vec![-1e4, -1e3, -1e2, 0.0]),
+            ("(-5e4,-5e4,0,0)", vec![-5e4, -5e4, 0.0, 0.0]),
+            ("(-1e6,-10,-1,0)", vec![-1e6, -10.0, -1.0, 0.0]),
+            ("(-1e6,-1e6,-1e6,0)", vec![-1e6, -1e6, -1e6, 0.0]),
+        ],
+    }
+}
+
+fn bench(c: &mut Criterion) {
+    for d in [2usize, 3, 4] {
+        let mut g = c.benchmark_group(format!("log_f_grad_d{d}"));
+        for (name, z) in cases(d) {
+            g.bench_with_input(BenchmarkId::from_parameter(name), &z, |b, z| {
+                let mut grad = [0.0; 4];
+                b.iter(|| {
+                    log_normalization_into(black_box(z), Method::Exact, Some(&mut grad[..d]), None)
+                        .unwrap()
+                })
+            });
+        }
+        g.finish();
+    }
+    let mut g = c.benchmark_group("log_f_grad_general");
+    for d in [5usize, 8] {
+        let z: Vec<f64> = (0..d).map(|i| -10.0 * (d - 1 - i) as f64).collect();
+        g.bench_with_input(BenchmarkId::from_parameter(format!("d={d}")), &z, |b, z| {
+            let mut grad = vec![0.0; z.len()];
+            b.iter(|| {
+                log_normalization_into(black_box(z), Method::Exact, Some(&mut grad), None).unwrap()
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().warm_up_time(std::time::Duration::from_millis(500)).measurement_time(std::time::Duration::from_secs(2));
+    targets = bench
+}
+criterion_main!(benches);

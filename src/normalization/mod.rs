@@ -10,6 +10,8 @@ mod d2;
 mod gauss;
 mod general;
 mod quad;
+#[doc(hidden)]
+pub use quad::{log_f_sorted_fine, log_f_sorted_tuned};
 mod saddlepoint;
 
 use crate::error::{check_dim, check_finite, Error, Result, MAX_DIM};
