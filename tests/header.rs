@@ -81,4 +81,14 @@ fn header_declares_the_api() {
     assert!(h.contains("#define BINGHAM_VERSION_MAJOR "));
     assert!(h.contains("extern \"C\" {"));
     assert!(!h.contains("uintptr_t"), "usize must map to size_t");
+    for (part, value) in [
+        ("MAJOR", env!("CARGO_PKG_VERSION_MAJOR")),
+        ("MINOR", env!("CARGO_PKG_VERSION_MINOR")),
+        ("PATCH", env!("CARGO_PKG_VERSION_PATCH")),
+    ] {
+        assert!(
+            h.contains(&format!("#define BINGHAM_VERSION_{part} {value}\n")),
+            "BINGHAM_VERSION_{part} must be {value} (Cargo.toml): edit src/ffi/version.rs, then `make header`"
+        );
+    }
 }

@@ -182,6 +182,57 @@ pub(crate) unsafe fn write1(p: *mut f64, value: f64) {
     unsafe { write(p, std::slice::from_ref(&value)) }
 }
 
+// ---- opaque handles (`bingham_filter *` and future ones) ---------------------------------------
+//
+// A handle is a `Box<T>` turned into a raw pointer for C: created by `*_new(…, T **out)` with
+// [`write_handle`], borrowed by every other function with [`handle`] / [`handle_mut`], released by
+// `*_free` with [`free_handle`] (NULL is a no-op). The handle functions validate like all others.
+
+/// Borrows a handle passed as `const T *`.
+///
+/// # Safety
+/// `p` must be NULL or a pointer obtained from [`write_handle`] and not yet freed, not mutated
+/// concurrently (the header's "one handle per thread at a time").
+#[cfg_attr(not(test), allow(dead_code))]
+pub(crate) unsafe fn handle<'a, T>(name: &str, p: *const T) -> FfiResult<&'a T> {
+    need(name, p)?;
+    // SAFETY: non-NULL, aligned, and per the contract a live Box<T> allocation.
+    Ok(unsafe { &*p })
+}
+
+/// Borrows a handle passed as `T *` for modification.
+///
+/// # Safety
+/// As for [`handle`], and no other reference to the handle may exist during the call.
+#[cfg_attr(not(test), allow(dead_code))]
+pub(crate) unsafe fn handle_mut<'a, T>(name: &str, p: *mut T) -> FfiResult<&'a mut T> {
+    need(name, p)?;
+    // SAFETY: non-NULL, aligned, a live Box<T> allocation used by this call only (contract).
+    Ok(unsafe { &mut *p })
+}
+
+/// Moves `value` to the heap and stores the new handle in `*out` (call last, after every check).
+///
+/// # Safety
+/// `out` must be non-NULL (checked with [`need`] before) and point to a writable `T *`.
+#[cfg_attr(not(test), allow(dead_code))]
+pub(crate) unsafe fn write_handle<T>(out: *mut *mut T, value: T) {
+    // SAFETY: the caller checked `out`; the Box is released by `free_handle`.
+    unsafe { *out = Box::into_raw(Box::new(value)) };
+}
+
+/// Releases a handle; NULL is a no-op.
+///
+/// # Safety
+/// `p` must be NULL or a pointer from [`write_handle`] that has not been freed yet.
+#[cfg_attr(not(test), allow(dead_code))]
+pub(crate) unsafe fn free_handle<T>(p: *mut T) {
+    if !p.is_null() {
+        // SAFETY: per the contract, p came from Box::into_raw and is freed exactly once.
+        drop(unsafe { Box::from_raw(p) });
+    }
+}
+
 /// Copies the calling thread's last error message into a caller buffer.
 ///
 /// The message describes the most recent call **on this thread** that returned a status other
@@ -343,6 +394,24 @@ mod tests {
         let st = unsafe { bingham_last_error_message(buf.as_mut_ptr(), 64, std::ptr::null_mut()) };
         assert_eq!(st, BINGHAM_OK);
         assert_eq!(last(), full, "querying never changes the message");
+    }
+
+    #[test]
+    fn handles() {
+        let mut out: *mut Vec<f64> = std::ptr::null_mut();
+        // SAFETY: `out` is a valid `*mut *mut Vec<f64>`; the handle is freed once below.
+        unsafe {
+            write_handle(&mut out, vec![1.0, 2.0]);
+            assert_eq!(handle("f", out).unwrap(), &vec![1.0, 2.0]);
+            handle_mut("f", out).unwrap().push(3.0);
+            assert_eq!(handle("f", out as *const Vec<f64>).unwrap().len(), 3);
+            let e = handle::<Vec<f64>>("filter", std::ptr::null()).unwrap_err();
+            assert_eq!(e.status, BINGHAM_ERR_NULL_ARGUMENT);
+            assert_eq!(e.message, "`filter` is NULL");
+            assert!(handle_mut::<Vec<f64>>("f", std::ptr::null_mut()).is_err());
+            free_handle(out);
+            free_handle::<Vec<f64>>(std::ptr::null_mut());
+        }
     }
 
     #[test]
