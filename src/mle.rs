@@ -107,16 +107,100 @@ pub fn mle_from_samples(d: usize, x: &[f64], w: Option<&[f64]>) -> Result<Bingha
 /// Solves `ω(z) = target` (ascending, positive, summing to 1) for `z` (ascending, `z_d = 0`).
 /// `start`: an optional initial guess (e.g. the previous filter step).
 pub(crate) fn solve_z(target: &[f64], start: Option<&[f64]>) -> Result<Vec<f64>> {
+    let mut z = vec![0.0; target.len()];
+    solve_z_into(target, start, &mut z)?;
+    Ok(z)
+}
+
+/// A d×d scratch matrix on the stack for d ≤ 4, on the heap otherwise.
+struct Scratch {
+    small: [f64; 16],
+    big: Vec<f64>,
+    len: usize,
+}
+
+impl Scratch {
+    fn new(len: usize) -> Self {
+        Scratch {
+            small: [0.0; 16],
+            big: if len > 16 { vec![0.0; len] } else { Vec::new() },
+            len,
+        }
+    }
+    fn get(&mut self) -> &mut [f64] {
+        if self.len <= 16 {
+            &mut self.small[..self.len]
+        } else {
+            &mut self.big[..]
+        }
+    }
+}
+
+/// Solves `A x = b` in place (`a` k×k row-major symmetric positive definite, destroyed;
+/// `b` overwritten by `x`) by Cholesky; `false` if `A` is not numerically positive definite.
+fn cholesky_solve(k: usize, a: &mut [f64], b: &mut [f64]) -> bool {
+    for j in 0..k {
+        let mut s = a[j * k + j];
+        for p in 0..j {
+            s -= a[j * k + p] * a[j * k + p];
+        }
+        if !(s > 0.0) {
+            return false;
+        }
+        let l = s.sqrt();
+        a[j * k + j] = l;
+        for i in j + 1..k {
+            let mut t = a[i * k + j];
+            for p in 0..j {
+                t -= a[i * k + p] * a[j * k + p];
+            }
+            a[i * k + j] = t / l;
+        }
+    }
+    for i in 0..k {
+        let mut t = b[i];
+        for p in 0..i {
+            t -= a[i * k + p] * b[p];
+        }
+        b[i] = t / a[i * k + i];
+    }
+    for i in (0..k).rev() {
+        let mut t = b[i];
+        for p in i + 1..k {
+            t -= a[p * k + i] * b[p];
+        }
+        b[i] = t / a[i * k + i];
+    }
+    true
+}
+
+/// Allocation-free for d ≤ 4: solves `ω(z) = target` into `z_out`; returns the number of
+/// Newton steps taken.
+///
+/// Newton's method on `G_i(z) = 1/ω_i(z) − 1/ω̂_i` (i < d): `1/ω_i ≈ 2|z_i|` for large
+/// concentrations, so `G` is nearly linear where `ω` itself is not, and one or two steps
+/// suffice from the Gaussian start `z_i = 1/(2ω̂_d) − 1/(2ω̂_i)`. The Jacobian is
+/// `−diag(1/ω²) H` with `H` the exact Hessian of `log F`; the step solves `H Δ = ω² ∘ G`. A
+/// backtracking line search on `Σ (ω̂_i/ω_i − 1)²` safeguards it.
+pub(crate) fn solve_z_into(
+    target: &[f64],
+    start: Option<&[f64]>,
+    z_out: &mut [f64],
+) -> Result<usize> {
     let d = target.len();
     let k = d - 1;
     let sum: f64 = target.iter().sum();
-    let t: Vec<f64> = target.iter().map(|v| v / sum).collect();
-    let mut z = vec![0.0; d];
+    let mut t = [0.0; MAX_DIM];
+    for i in 0..d {
+        t[i] = target[i] / sum;
+    }
+    let mut z = [0.0; MAX_DIM];
     match start {
         Some(s) if s.len() == d && s.iter().all(|v| v.is_finite()) => {
-            z.copy_from_slice(s);
-            let top = z[d - 1];
-            z.iter_mut().for_each(|v| *v -= top);
+            let top = s[d - 1];
+            for i in 0..d {
+                z[i] = s[i] - top;
+            }
         }
         _ => {
             for i in 0..k {
@@ -124,49 +208,63 @@ pub(crate) fn solve_z(target: &[f64], start: Option<&[f64]>) -> Result<Vec<f64>>
             }
         }
     }
-    let mut grad = [0.0; MAX_DIM];
-    let mut hess = vec![0.0; d * d];
     let resid = |g: &[f64]| -> f64 {
         (0..k)
             .map(|i| ((g[i] - t[i]) / t[i]).abs())
             .fold(0.0, f64::max)
     };
-    let merit = |g: &[f64]| -> f64 { (0..k).map(|i| ((g[i] - t[i]) / t[i]).powi(2)).sum() };
-    log_normalization_into(&z, Method::Exact, Some(&mut grad[..d]), Some(&mut hess))?;
+    let merit = |g: &[f64]| -> f64 { (0..k).map(|i| (t[i] / g[i] - 1.0).powi(2)).sum() };
+    let mut grad = [0.0; MAX_DIM];
+    let mut tgrad = [0.0; MAX_DIM];
+    let mut hess = Scratch::new(d * d);
+    let mut thess = Scratch::new(d * d);
+    let mut jac = Scratch::new(k * k);
+    let mut step = [0.0; MAX_DIM];
+    let mut trial = [0.0; MAX_DIM];
+    log_normalization_into(
+        &z[..d],
+        Method::Exact,
+        Some(&mut grad[..d]),
+        Some(hess.get()),
+    )?;
     let mut phi = merit(&grad[..d]);
-    for _iter in 0..MAX_ITER {
+    for iter in 0..MAX_ITER {
         if resid(&grad[..d]) <= MLE_TOL {
-            return Ok(z);
+            z_out.copy_from_slice(&z[..d]);
+            return Ok(iter);
         }
-        // Newton step on the first d−1 coordinates: J Δ = t − ω.
-        let j = DMatrix::from_fn(k, k, |a, b| hess[a * d + b]);
-        let rhs = DVector::from_fn(k, |a, _| t[a] - grad[a]);
-        let step = match j.clone().cholesky() {
-            Some(ch) => ch.solve(&rhs),
-            None => match j.lu().solve(&rhs) {
-                Some(s) => s,
-                None => {
-                    return Err(Error::NotConverged(
-                        "MLE: singular Jacobian in Newton's method".into(),
-                    ))
+        {
+            let h = hess.get();
+            let j = jac.get();
+            for a in 0..k {
+                for b in 0..k {
+                    j[a * k + b] = h[a * d + b];
                 }
-            },
-        };
-        if !step.iter().all(|v| v.is_finite()) {
-            return Err(Error::NotConverged("MLE: non-finite Newton step".into()));
+                step[a] = grad[a] * grad[a] * (1.0 / grad[a] - 1.0 / t[a]);
+            }
+        }
+        if !cholesky_solve(k, jac.get(), &mut step[..k]) || !step[..k].iter().all(|v| v.is_finite())
+        {
+            return Err(Error::NotConverged(
+                "MLE: the Hessian of log F is not numerically positive definite".into(),
+            ));
         }
         let mut alpha = 1.0;
         let mut accepted = false;
-        let mut trial = z.clone();
-        let mut tgrad = [0.0; MAX_DIM];
         for _ls in 0..60 {
             for i in 0..k {
                 trial[i] = z[i] + alpha * step[i];
             }
-            let ok = log_normalization_into(&trial, Method::Exact, Some(&mut tgrad[..d]), None);
+            trial[k] = 0.0;
+            let ok = log_normalization_into(
+                &trial[..d],
+                Method::Exact,
+                Some(&mut tgrad[..d]),
+                Some(thess.get()),
+            );
             if ok.is_ok() {
                 let p = merit(&tgrad[..d]);
-                if p < phi * (1.0 - 1e-4 * alpha) || p == 0.0 {
+                if p < phi * (1.0 - 1e-4 * alpha) || resid(&tgrad[..d]) <= MLE_TOL {
                     accepted = true;
                     phi = p;
                     break;
@@ -175,20 +273,29 @@ pub(crate) fn solve_z(target: &[f64], start: Option<&[f64]>) -> Result<Vec<f64>>
             alpha *= 0.5;
         }
         if !accepted {
-            // Rounding floor reached: accept if already close, else fail.
+            // The rounding floor of ω is reached: accept when already close.
             if resid(&grad[..d]) <= 1e3 * MLE_TOL {
-                return Ok(z);
+                z_out.copy_from_slice(&z[..d]);
+                return Ok(iter);
             }
             return Err(Error::NotConverged(format!(
                 "MLE: line search failed at relative residual {:e}",
                 resid(&grad[..d])
             )));
         }
-        z.copy_from_slice(&trial);
-        log_normalization_into(&z, Method::Exact, Some(&mut grad[..d]), Some(&mut hess))?;
+        z[..d].copy_from_slice(&trial[..d]);
+        grad[..d].copy_from_slice(&tgrad[..d]);
+        std::mem::swap(&mut hess, &mut thess);
     }
     Err(Error::NotConverged(format!(
         "MLE: no convergence in {MAX_ITER} Newton steps (relative residual {:e})",
         resid(&grad[..d])
     )))
+}
+
+/// Number of Newton steps the MLE takes for the target `ω̂` (diagnostics and benchmarks).
+#[doc(hidden)]
+pub fn newton_steps(target: &[f64]) -> Result<usize> {
+    let mut z = vec![0.0; target.len()];
+    solve_z_into(target, None, &mut z)
 }

@@ -53,8 +53,6 @@ const LAYOUT: Layout = Layout {
     trunc: 50.0,
     kappa: 3.0,
 };
-/// Skip the far half when `|z| / 2` exceeds this (its share is below e^{−80}).
-const FAR_SKIP: f64 = 160.0;
 /// Most breakpoints a half can need.
 const MAX_BREAKS: usize = 200;
 
@@ -297,7 +295,12 @@ fn integrate_counted<const M: usize>(
         q: [[0.0; 4]; 4],
     };
     half(rule, lay, &g1, &g2, true, fourth, &mut sums);
-    if g1.rate() <= 2.0 * FAR_SKIP {
+    // The far half u ∈ [½, 1]: A(u) decreases and B(1−u) ≤ 1, so its integral is at most
+    // A(½)/2 (times the moment factors, ≤ 1). Skip it when that bound is negligible against
+    // F and against every moment integral.
+    let bound = 0.5 * g1.eval(0.5, std::f64::consts::FRAC_1_SQRT_2, false).g;
+    let smallest = sums.m[..z.len()].iter().fold(sums.f, |a, &b| a.min(b));
+    if bound > 1e-18 * smallest {
         half(rule, lay, &g1, &g2, false, fourth, &mut sums);
     }
     let log_f = c.ln() + sums.f.ln();
