@@ -81,7 +81,7 @@ clippy:
 
 # The Rust tests, the C/C++ tests (tests/c_tests.rs) and the header check (tests/header.rs).
 rust-test:
-	$(CARGO) test --release
+	$(CARGO) test --release --no-fail-fast
 
 python-test: build
 	cd examples/python && BINGHAM_LIB=$(abspath $(RELEASE))/libbingham.so $(PYTHON) -m pytest -q -p no:cacheprovider

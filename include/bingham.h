@@ -238,7 +238,7 @@ enum bingham_status bingham_log_normalization_constant(size_t d,
  *
  * Provided for comparison and for users who need agreement with those libraries; the relative
  * error of F is typically 1e-3 to 5e-2 and the gradient entries do not sum exactly to 1. Prefer
- * `bingham_log_normalization_constant()`, which is exact and usually as fast.
+ * `bingham_log_normalization_constant()`, which is exact.
  *
  * Arguments, errors and safety as for `bingham_log_normalization_constant()`.
  *
