@@ -14,6 +14,8 @@ pub mod distribution;
 pub mod error;
 mod linalg;
 pub mod ffi;
+pub mod filter;
+mod fixed;
 pub mod mle;
 pub mod normalization;
 pub mod quaternion;

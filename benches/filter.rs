@@ -1,0 +1,66 @@
+//! One filter step (predict + update) in the JAIF Sec. 7 scenarios (criterion).
+//! Targets (median): d = 2 ≤ 1 µs, d = 4 ≤ 20 µs.
+//!
+//! The filter runs on simulated measurements (the library's sampler, fixed seeds), cycling
+//! through 10 runs of 100 steps, so the state is in its normal operating range; the noise
+//! parameters are the same arrays every step (the normal case: their moments are cached).
+
+#[path = "../tests/filter_common/mod.rs"]
+mod common;
+
+use bingham::filter::BinghamFilter;
+use common::{scenario_2d, scenario_4d, simulate, Scenario};
+use criterion::{black_box, criterion_group, criterion_main, Criterion};
+
+fn measurements(sc: &Scenario) -> Vec<Vec<f64>> {
+    (0..10).flat_map(|r| simulate(sc, r).1).collect()
+}
+
+fn bench_step(c: &mut Criterion, name: &str, sc: &Scenario) {
+    let meas = measurements(sc);
+    let mut g = c.benchmark_group("filter_step");
+    let fresh = || BinghamFilter::new(sc.d, &sc.m0, &sc.z0).unwrap();
+    let mut f = fresh();
+    let mut k = 0usize;
+    g.bench_function(format!("{name} predict+update"), |b| {
+        b.iter(|| {
+            if k % common::STEPS == 0 {
+                f = fresh();
+            }
+            let z = &meas[k % meas.len()];
+            k += 1;
+            f.predict(black_box(&sc.mw), black_box(&sc.zw)).unwrap();
+            f.update(black_box(z), black_box(&sc.mv), black_box(&sc.zv))
+                .unwrap();
+        })
+    });
+    let f = {
+        let mut f = fresh();
+        for z in &meas[..50] {
+            f.predict(&sc.mw, &sc.zw).unwrap();
+            f.update(z, &sc.mv, &sc.zv).unwrap();
+        }
+        f
+    };
+    g.bench_function(format!("{name} log_likelihood"), |b| {
+        b.iter(|| {
+            f.log_likelihood(black_box(&meas[51]), &sc.mv, &sc.zv)
+                .unwrap()
+        })
+    });
+    g.finish();
+}
+
+fn bench(c: &mut Criterion) {
+    bench_step(c, "d2", &scenario_2d());
+    bench_step(c, "d4", &scenario_4d());
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default()
+        .warm_up_time(std::time::Duration::from_millis(500))
+        .measurement_time(std::time::Duration::from_secs(3));
+    targets = bench
+}
+criterion_main!(benches);

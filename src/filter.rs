@@ -1,0 +1,427 @@
+//! The recursive Bingham filter (Kurz, Gilitschenski, Julier & Hanebeck, JAIF 2014, Sec. 6) for
+//! axes in the plane (`d = 2`, complex numbers `(re, im)`) and orientations in space (`d = 4`,
+//! unit quaternions, **scalar first** `(w, x, y, z)`).
+//!
+//! System model `x_{k+1} = x_k ⊕ w_k`, measurement model `z_k = x_k ⊕ v_k`, with `w_k`, `v_k`
+//! Bingham-distributed noise and `⊕` complex multiplication (`d = 2`) or the Hamilton product
+//! (`d = 4`). The state is a Bingham distribution `(M, Z)`; it stays one:
+//!
+//! - **predict**: `A = E[x xᵀ]` of the state, `B = E[w wᵀ]` of the noise, the second moment of
+//!   `x ⊕ w` is `C = Σ_ab A_ab L_a B L_bᵀ` (exact), and the new state is the Bingham
+//!   distribution with second moment `C` (moment matching, the maximum-likelihood fit). With a
+//!   known rotation `u` (e.g. a gyroscope increment), [`BinghamFilter::predict_rotation`]
+//!   predicts `x ⊕ u ⊕ w`: the state is first rotated exactly, `x ⊕ u ~ Bingham(R(u) M, Z)`.
+//! - **update** with a measurement `ẑ`: the likelihood `f_v(x⁻¹ ⊕ ẑ)` is a Bingham density in
+//!   `x` with `M_L = L(ẑ) D M_v` (columns `ẑ ⊕ (D m_i)`, `D = diag(1, −1, …, −1)` the
+//!   conjugation) and `Z_L = Z_v`; the posterior is the exact Bayes product, the
+//!   eigendecomposition of `M Z Mᵀ + M_L Z_L M_Lᵀ`.
+//!
+//! Conventions as everywhere in the crate: `M` row-major `d×d` with orthonormal columns (the
+//! principal directions, the **last column is the mode**), `z` of length `d` in any order and
+//! shift on input, sorted ascending with `z[d−1] = 0` on output.
+//!
+//! # Speed and memory
+//!
+//! The filter works on fixed-size stack arrays: after the first step with a given noise, a
+//! predict or update performs **no heap allocation**. The noises' validation, normalization and
+//! moments are cached, keyed on the bit patterns of the noise parameters, so passing the same
+//! arrays every step costs nothing. The moment-matching solver is warm-started from the previous
+//! prediction.
+//!
+//! # Concentration limits
+//!
+//! Repeated sharp updates can make the state arbitrarily concentrated; updates stay exact for any
+//! finite concentration (tested to `|z| = 1e12` and beyond). The prediction needs the state's
+//! second moment, which is singular to working precision for `|z| ≳ 1e13`: there, concentrations
+//! below `−MAX_CONCENTRATION` (of the state and of the process noise) are raised to
+//! `−MAX_CONCENTRATION` (an angular spread of about 7 µrad). The composed moment's smallest
+//! eigenvalue is at least that of the state's moment, so the prediction never fails because the
+//! state (or the noise) is sharp.
+
+use crate::distribution::Bingham;
+use crate::error::{Error, Result};
+use crate::fixed::{self, Mat};
+use nalgebra::{DMatrix, DVector};
+
+/// The largest concentration `|z_i|` the prediction uses (see the module documentation,
+/// "Concentration limits"): before the moments of the state and of the process noise are
+/// formed, every `z_i < −MAX_CONCENTRATION` is replaced by `−MAX_CONCENTRATION`.
+/// `z = −1e10` corresponds to an angular standard deviation of about `1/√(2·1e10) ≈ 7 µrad`.
+pub const MAX_CONCENTRATION: f64 = 1e10;
+
+/// A recursive Bingham filter for `d = 2` (axes) or `d = 4` (unit quaternions).
+///
+/// Create it with [`BinghamFilter::new`] from the initial estimate, then alternate
+/// [`predict`](BinghamFilter::predict) (or [`predict_rotation`](BinghamFilter::predict_rotation))
+/// and [`update`](BinghamFilter::update). Every method either succeeds or returns an error and
+/// leaves the filter exactly as it was (the new state is computed completely before it is
+/// assigned).
+///
+/// The type is `Send` and `Sync`, holds no global state, and cloning gives an independent
+/// filter.
+#[derive(Debug, Clone)]
+pub struct BinghamFilter {
+    inner: Inner,
+}
+
+#[derive(Debug, Clone)]
+enum Inner {
+    D2(Core<2>),
+    D4(Core<4>),
+}
+
+/// Runs `$body` with `$c` bound to the dimension-specific core.
+macro_rules! dispatch {
+    ($self:expr, $c:ident => $body:expr) => {
+        match $self {
+            Inner::D2($c) => $body,
+            Inner::D4($c) => $body,
+        }
+    };
+}
+
+impl BinghamFilter {
+    /// A filter with the initial estimate `Bingham(M, Z)`.
+    ///
+    /// - `d`: 2 (axes, complex numbers `(re, im)`) or 4 (quaternions, scalar first).
+    /// - `m`: `d×d` row-major, orthogonal within `ORTHOGONALITY_TOL` (it is re-orthonormalized).
+    /// - `z`: `d` concentrations, column `i` of `M` belongs to `z[i]`; any order and shift.
+    ///
+    /// Errors: [`Error::InvalidDimension`] (d not 2 or 4, wrong lengths),
+    /// [`Error::InvalidArgument`] (NaN/Inf, `M` not orthogonal).
+    pub fn new(d: usize, m: &[f64], z: &[f64]) -> Result<BinghamFilter> {
+        let inner = match d {
+            2 => Inner::D2(Core::new(m, z)?),
+            4 => Inner::D4(Core::new(m, z)?),
+            _ => {
+                return Err(Error::InvalidDimension(format!(
+                    "the filter exists for d = 2 (axes) and d = 4 (quaternions), got d = {d}"
+                )))
+            }
+        };
+        Ok(BinghamFilter { inner })
+    }
+
+    /// A filter whose initial estimate is `b` (`b.dim()` must be 2 or 4).
+    pub fn from_bingham(b: &Bingham) -> Result<BinghamFilter> {
+        BinghamFilter::new(b.dim(), &b.m_row_major(), b.z().as_slice())
+    }
+
+    /// The dimension `d` (2 or 4).
+    pub fn dim(&self) -> usize {
+        match self.inner {
+            Inner::D2(_) => 2,
+            Inner::D4(_) => 4,
+        }
+    }
+
+    /// The current estimate as a [`Bingham`] distribution (allocates; equal to
+    /// [`BinghamFilter::state_into`] up to rounding, as `M` passes through the re-orthonormalization
+    /// of [`Bingham`]).
+    pub fn state(&self) -> Bingham {
+        let d = self.dim();
+        let mut m = vec![0.0; d * d];
+        let mut z = vec![0.0; d];
+        self.state_into(&mut m, &mut z)
+            .expect("buffers have the right length");
+        Bingham::from_parts_unchecked(DMatrix::from_row_slice(d, d, &m), DVector::from_vec(z))
+    }
+
+    /// Copies the current estimate into `m` (`d×d` row-major, orthonormal columns, the last one
+    /// the mode) and `z` (ascending, `z[d−1] = 0`). Errors: wrong lengths (nothing written).
+    pub fn state_into(&self, m: &mut [f64], z: &mut [f64]) -> Result<()> {
+        dispatch!(&self.inner, c => c.state_into(m, z))
+    }
+
+    /// Replaces the estimate by `Bingham(M, Z)` (validated as in [`BinghamFilter::new`]; the
+    /// dimension stays). The noise caches are kept.
+    pub fn set_state(&mut self, m: &[f64], z: &[f64]) -> Result<()> {
+        dispatch!(&mut self.inner, c => c.set_state(m, z))
+    }
+
+    /// The mode of the estimate (the last column of `M`), a unit vector of length `d`. `−mode`
+    /// is a mode as well (antipodal symmetry).
+    pub fn mode(&self) -> Vec<f64> {
+        let mut v = vec![0.0; self.dim()];
+        self.mode_into(&mut v).expect("buffer has the right length");
+        v
+    }
+
+    /// Copies the mode into `out` (length `d`). Errors: wrong length (nothing written).
+    pub fn mode_into(&self, out: &mut [f64]) -> Result<()> {
+        dispatch!(&self.inner, c => c.mode_into(out))
+    }
+
+    /// Prediction through `x_{k+1} = x_k ⊕ w_k`, `w_k ~ Bingham(M_w, Z_w)` (`m_w` row-major
+    /// `d×d` orthogonal, `z_w` length `d`, any order and shift).
+    ///
+    /// The noise's mode may carry a known offset (a nominal rotation). Concentrations beyond
+    /// [`MAX_CONCENTRATION`] are capped for the moment computation.
+    ///
+    /// Errors: [`Error::InvalidDimension`] (lengths), [`Error::InvalidArgument`] (NaN/Inf,
+    /// `M_w` not orthogonal), [`Error::NotConverged`] / [`Error::Numerical`] (moment matching).
+    pub fn predict(&mut self, m_w: &[f64], z_w: &[f64]) -> Result<()> {
+        dispatch!(&mut self.inner, c => c.predict(None, m_w, z_w))
+    }
+
+    /// Prediction through `x_{k+1} = x_k ⊕ u ⊕ w_k` with a known unit `u` (length `d`, e.g. the
+    /// rotation increment integrated from a gyroscope, quaternion scalar first; unit within
+    /// `UNIT_TOL`, then normalized). The rotation is exact (`x ⊕ u ~ Bingham(R(u) M, Z)`), then
+    /// the noise is composed as in [`BinghamFilter::predict`].
+    pub fn predict_rotation(&mut self, u: &[f64], m_w: &[f64], z_w: &[f64]) -> Result<()> {
+        dispatch!(&mut self.inner, c => c.predict(Some(u), m_w, z_w))
+    }
+
+    /// Measurement update with `measurement = x ⊕ v`, `v ~ Bingham(M_v, Z_v)`.
+    ///
+    /// `measurement`: length `d`, unit within `UNIT_TOL` (then normalized); its sign does not
+    /// matter. The posterior is exact (Bayes' rule for Bingham densities).
+    ///
+    /// Errors: [`Error::InvalidDimension`] (lengths), [`Error::InvalidArgument`] (NaN/Inf,
+    /// `M_v` not orthogonal, measurement not unit), [`Error::Numerical`] (overflow).
+    pub fn update(&mut self, measurement: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<()> {
+        dispatch!(&mut self.inner, c => c.update(measurement, m_v, z_v))
+    }
+
+    /// The natural logarithm of the predictive density of `measurement` under the current
+    /// estimate: `log ∫ f_state(x) f_v(x⁻¹ ⊕ ẑ) dx`, a density on the unit sphere with respect to
+    /// the surface measure (antipodally symmetric). Use it for gating and for weighting filters
+    /// in a bank. The filter is not changed.
+    ///
+    /// With `P = M Z Mᵀ + M_L Z_v M_Lᵀ` (as in the update) and its largest eigenvalue `λ`:
+    /// `log p(ẑ) = log F(eig(P) − λ) + λ − log F(Z) − log F(Z_v)`.
+    ///
+    /// Arguments and errors as for [`BinghamFilter::update`].
+    pub fn log_likelihood(&self, measurement: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<f64> {
+        dispatch!(&self.inner, c => c.log_likelihood(measurement, m_v, z_v))
+    }
+}
+
+/// A validated, normalized noise distribution with the quantities the filter needs.
+#[derive(Debug, Clone, PartialEq)]
+struct Noise<const D: usize> {
+    m: Mat<D>,
+    z: [f64; D],
+    /// Process noise: the second moment (of the capped concentrations). Measurement noise: unused.
+    moment: Mat<D>,
+    /// Measurement noise: `log F(z)`. Process noise: unused.
+    log_f: f64,
+}
+
+/// Which quantities a noise entry carries.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Role {
+    Process,
+    Measurement,
+}
+
+/// Longest key: `d² + d` for `d = 4`.
+const KEY_LEN: usize = 20;
+
+/// One cached noise, keyed on the bit patterns of the caller's `m` and `z`.
+#[derive(Debug, Clone, PartialEq)]
+struct NoiseCache<const D: usize> {
+    key: [u64; KEY_LEN],
+    entry: Option<Noise<D>>,
+}
+
+fn key_of(m: &[f64], z: &[f64]) -> Option<[u64; KEY_LEN]> {
+    if m.len() + z.len() > KEY_LEN {
+        return None;
+    }
+    let mut k = [0u64; KEY_LEN];
+    for (slot, v) in k.iter_mut().zip(m.iter().chain(z.iter())) {
+        *slot = v.to_bits();
+    }
+    Some(k)
+}
+
+impl<const D: usize> NoiseCache<D> {
+    fn empty() -> Self {
+        NoiseCache {
+            key: [0; KEY_LEN],
+            entry: None,
+        }
+    }
+
+    /// The cached entry if it was built from exactly these parameters (lengths D² and D).
+    fn lookup(&self, m: &[f64], z: &[f64]) -> Option<&Noise<D>> {
+        match (&self.entry, key_of(m, z)) {
+            (Some(e), Some(k)) if m.len() == D * D && z.len() == D && k == self.key => Some(e),
+            _ => None,
+        }
+    }
+
+    /// Validates and prepares a noise (no caching).
+    fn build(role: Role, m: &[f64], z: &[f64]) -> Result<Noise<D>> {
+        let (mm, zz) = match role {
+            Role::Process => fixed::params::<D>("m_w", m, "z_w", z)?,
+            Role::Measurement => fixed::params::<D>("m_v", m, "z_v", z)?,
+        };
+        let (moment, log_f) = match role {
+            Role::Process => {
+                let (_, w) = fixed::log_f_omega(&capped(&zz))?;
+                (fixed::congruence(&mm, &w), 0.0)
+            }
+            Role::Measurement => (fixed::zeros::<D>(), fixed::log_f_omega(&zz)?.0),
+        };
+        Ok(Noise {
+            m: mm,
+            z: zz,
+            moment,
+            log_f,
+        })
+    }
+
+    /// The entry for these parameters, built and stored on a miss. On error the cache is
+    /// unchanged.
+    fn get(&mut self, role: Role, m: &[f64], z: &[f64]) -> Result<&Noise<D>> {
+        if self.lookup(m, z).is_none() {
+            let e = Self::build(role, m, z)?;
+            self.key = key_of(m, z).expect("lengths were validated");
+            self.entry = Some(e);
+        }
+        Ok(self.entry.as_ref().expect("just filled"))
+    }
+}
+
+/// `z` with every entry below `−MAX_CONCENTRATION` raised to it.
+fn capped<const D: usize>(z: &[f64; D]) -> [f64; D] {
+    let mut c = *z;
+    c.iter_mut()
+        .for_each(|v| *v = v.max(-MAX_CONCENTRATION));
+    c
+}
+
+/// The filter for one dimension.
+#[derive(Debug, Clone, PartialEq)]
+struct Core<const D: usize> {
+    /// Orthonormal, row-major; the last column is the mode.
+    m: Mat<D>,
+    /// Ascending, `z[D−1] = 0`.
+    z: [f64; D],
+    /// The last prediction's moment-matching solution with its derivatives (warm start).
+    predicted: Option<fixed::Derivs<D>>,
+    process: NoiseCache<D>,
+    measurement: NoiseCache<D>,
+}
+
+impl<const D: usize> Core<D> {
+    fn new(m: &[f64], z: &[f64]) -> Result<Self> {
+        let (m, z) = fixed::params::<D>("m", m, "z", z)?;
+        Ok(Core {
+            m,
+            z,
+            predicted: None,
+            process: NoiseCache::empty(),
+            measurement: NoiseCache::empty(),
+        })
+    }
+
+    fn set_state(&mut self, m: &[f64], z: &[f64]) -> Result<()> {
+        let (m, z) = fixed::params::<D>("m", m, "z", z)?;
+        self.m = m;
+        self.z = z;
+        self.predicted = None;
+        Ok(())
+    }
+
+    fn state_into(&self, m: &mut [f64], z: &mut [f64]) -> Result<()> {
+        if m.len() != D * D || z.len() != D {
+            return Err(Error::InvalidDimension(format!(
+                "state buffers must have lengths {} and {D}, got {} and {}",
+                D * D,
+                m.len(),
+                z.len()
+            )));
+        }
+        for i in 0..D {
+            m[i * D..(i + 1) * D].copy_from_slice(&self.m[i]);
+        }
+        z.copy_from_slice(&self.z);
+        Ok(())
+    }
+
+    fn mode_into(&self, out: &mut [f64]) -> Result<()> {
+        if out.len() != D {
+            return Err(Error::InvalidDimension(format!(
+                "mode buffer must have length {D}, got {}",
+                out.len()
+            )));
+        }
+        for (o, row) in out.iter_mut().zip(self.m.iter()) {
+            *o = row[D - 1];
+        }
+        Ok(())
+    }
+
+    fn predict(&mut self, u: Option<&[f64]>, m_w: &[f64], z_w: &[f64]) -> Result<()> {
+        let u = u.map(|u| fixed::unit::<D>("u", u)).transpose()?;
+        let noise = self.process.get(Role::Process, m_w, z_w)?;
+        let m = match u {
+            Some(u) => fixed::mat_mul(&fixed::right(&u), &self.m),
+            None => self.m,
+        };
+        let (_, w) = fixed::log_f_omega(&capped(&self.z))?;
+        let a = fixed::congruence(&m, &w);
+        let c = fixed::compose_moments(&a, &noise.moment);
+        let (m_new, z_new, solution) = fixed::mle(&c, self.predicted.as_ref())?;
+        self.m = m_new;
+        self.z = z_new;
+        self.predicted = Some(solution);
+        Ok(())
+    }
+
+    /// `M_L = L(ẑ) D M_v`: the likelihood's principal directions.
+    fn likelihood_m(zhat: &[f64; D], m_v: &Mat<D>) -> Mat<D> {
+        let mut dm = *m_v;
+        for row in dm.iter_mut().skip(1) {
+            row.iter_mut().for_each(|v| *v = -*v);
+        }
+        fixed::mat_mul(&fixed::left(zhat), &dm)
+    }
+
+    fn update(&mut self, measurement: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<()> {
+        let zhat = fixed::unit::<D>("measurement", measurement)?;
+        let noise = self.measurement.get(Role::Measurement, m_v, z_v)?;
+        let ml = Self::likelihood_m(&zhat, &noise.m);
+        let (v, l) = fixed::product_eigen(&self.m, &self.z, &ml, &noise.z)?;
+        let (m_new, z_new) = fixed::normalize(&v, &l);
+        if !z_new.iter().all(|v| v.is_finite()) {
+            return Err(Error::Numerical(
+                "update: the posterior concentrations are not finite".into(),
+            ));
+        }
+        self.m = m_new;
+        self.z = z_new;
+        Ok(())
+    }
+
+    fn log_likelihood(&self, measurement: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<f64> {
+        let zhat = fixed::unit::<D>("measurement", measurement)?;
+        let built;
+        let noise = match self.measurement.lookup(m_v, z_v) {
+            Some(n) => n,
+            None => {
+                built = NoiseCache::<D>::build(Role::Measurement, m_v, z_v)?;
+                &built
+            }
+        };
+        let ml = Self::likelihood_m(&zhat, &noise.m);
+        let (_, l) = fixed::product_eigen(&self.m, &self.z, &ml, &noise.z)?;
+        let top = l[D - 1];
+        let mut zp = [0.0; D];
+        for (o, v) in zp.iter_mut().zip(l.iter()) {
+            *o = v - top;
+        }
+        let (lf_post, _) = fixed::log_f_omega(&zp)?;
+        let (lf_state, _) = fixed::log_f_omega(&self.z)?;
+        let value = lf_post + top - lf_state - noise.log_f;
+        if !value.is_finite() {
+            return Err(Error::Numerical(format!(
+                "log-likelihood is not finite ({value})"
+            )));
+        }
+        Ok(value)
+    }
+}

@@ -1,0 +1,233 @@
+//! The evaluation scenarios of JAIF Sec. 7 (shared by `tests/filter*.rs` and `benches/filter.rs`):
+//! simulation of the truth and the measurements with the library's exact sampler, the Bingham
+//! filter, and the Kalman filter adapted as in JAIF Sec. 7.
+//!
+//! The noise draws are the same as those of `examples/c/*_tracking.c`: per Monte Carlo run `r`,
+//! `bingham_sample(d, Mw, Zw, seed_w(r), STEPS, …)` and `bingham_sample(d, Mv, Zv, seed_v(r), …)`
+//! (`Bingham::sample` with `StdRng::seed_from_u64`, which is what `bingham_sample` does).
+#![allow(dead_code)]
+
+use bingham::filter::BinghamFilter;
+use bingham::quaternion::compose;
+use bingham::Bingham;
+use nalgebra::{DMatrix, DVector};
+use rand::rngs::StdRng;
+use rand::SeedableRng;
+
+/// Time steps per run.
+pub const STEPS: usize = 100;
+
+/// One scenario: initial estimate, noises (row-major `M`, `z`) and the true initial state.
+#[derive(Clone, Debug)]
+pub struct Scenario {
+    pub d: usize,
+    pub m0: Vec<f64>,
+    pub z0: Vec<f64>,
+    pub mw: Vec<f64>,
+    pub zw: Vec<f64>,
+    pub mv: Vec<f64>,
+    pub zv: Vec<f64>,
+    pub x0: Vec<f64>,
+}
+
+fn identity(d: usize) -> Vec<f64> {
+    (0..d * d)
+        .map(|k| if k / d == k % d { 1.0 } else { 0.0 })
+        .collect()
+}
+
+fn anti_diagonal(d: usize) -> Vec<f64> {
+    (0..d * d)
+        .map(|k| if k / d + k % d == d - 1 { 1.0 } else { 0.0 })
+        .collect()
+}
+
+/// JAIF Sec. 7.1: axis estimation, d = 2.
+pub fn scenario_2d() -> Scenario {
+    Scenario {
+        d: 2,
+        m0: identity(2),
+        z0: vec![-1.0, 0.0],
+        mw: anti_diagonal(2),
+        zw: vec![-200.0, 0.0],
+        mv: anti_diagonal(2),
+        zv: vec![-2.0, 0.0],
+        x0: vec![1.0, 0.0],
+    }
+}
+
+/// JAIF Sec. 7.2: quaternions, d = 4.
+pub fn scenario_4d() -> Scenario {
+    Scenario {
+        d: 4,
+        m0: identity(4),
+        z0: vec![-1.0, -1.0, -1.0, 0.0],
+        mw: anti_diagonal(4),
+        zw: vec![-200.0, -200.0, -2.0, 0.0],
+        mv: anti_diagonal(4),
+        zv: vec![-500.0, -500.0, -500.0, 0.0],
+        x0: vec![0.0, 1.0, 0.0, 0.0],
+    }
+}
+
+/// Seeds of run `r` (the same in the C examples).
+pub fn seed_w(r: u64) -> u64 {
+    1000 + 2 * r
+}
+pub fn seed_v(r: u64) -> u64 {
+    1001 + 2 * r
+}
+
+/// `n` samples of `Bingham(m, z)` as `bingham_sample(d, m, z, seed, n, …)` draws them.
+pub fn draw(d: usize, m: &[f64], z: &[f64], seed: u64, n: usize) -> Vec<Vec<f64>> {
+    let b = Bingham::new(
+        DMatrix::from_row_slice(d, d, m),
+        DVector::from_column_slice(z),
+    )
+    .unwrap();
+    let mut rng = StdRng::seed_from_u64(seed);
+    b.sample(&mut rng, n)
+        .into_iter()
+        .map(|v| v.as_slice().to_vec())
+        .collect()
+}
+
+/// One run: the true states `x_1..x_STEPS` and measurements `z_k = x_k ⊕ v_k`, where
+/// `x_k = x_{k−1} ⊕ w_{k−1}`.
+pub fn simulate(sc: &Scenario, run: u64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let w = draw(sc.d, &sc.mw, &sc.zw, seed_w(run), STEPS);
+    let v = draw(sc.d, &sc.mv, &sc.zv, seed_v(run), STEPS);
+    let mut x = sc.x0.clone();
+    let mut truth = Vec::with_capacity(STEPS);
+    let mut meas = Vec::with_capacity(STEPS);
+    for k in 0..STEPS {
+        x = normalized(&compose(&x, &w[k]).unwrap());
+        meas.push(normalized(&compose(&x, &v[k]).unwrap()));
+        truth.push(x.clone());
+    }
+    (truth, meas)
+}
+
+pub fn normalized(x: &[f64]) -> Vec<f64> {
+    let n = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+    x.iter().map(|v| v / n).collect()
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// The axial angular error `min(∠(a, b), π − ∠(a, b))` (JAIF eq. 67–68).
+pub fn axial_error(a: &[f64], b: &[f64]) -> f64 {
+    let c = (dot(a, b) / (dot(a, a) * dot(b, b)).sqrt()).clamp(-1.0, 1.0);
+    let ang = c.acos();
+    ang.min(std::f64::consts::PI - ang)
+}
+
+pub fn rmse(errors: &[f64]) -> f64 {
+    (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt()
+}
+
+/// Runs the Bingham filter on one simulated run; returns the errors per step.
+pub fn run_bingham(sc: &Scenario, truth: &[Vec<f64>], meas: &[Vec<f64>]) -> Vec<f64> {
+    let mut f = BinghamFilter::new(sc.d, &sc.m0, &sc.z0).unwrap();
+    let mut errors = Vec::with_capacity(truth.len());
+    for (x, z) in truth.iter().zip(meas) {
+        f.predict(&sc.mw, &sc.zw).unwrap();
+        f.update(z, &sc.mv, &sc.zv).unwrap();
+        errors.push(axial_error(x, &f.mode()));
+    }
+    errors
+}
+
+/// The Gaussian fitted to one mode of a Bingham distribution (JAIF eq. 57, for d = 4
+/// "analogously"): `C = E[(s x − μ)(s x − μ)ᵀ]` with `μ` the mode and `s = sign(μᵀx)`, by
+/// Monte Carlo with `n` samples; returns (μ, C row-major).
+pub fn gaussian_fit(d: usize, m: &[f64], z: &[f64], n: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
+    let b = Bingham::new(
+        DMatrix::from_row_slice(d, d, m),
+        DVector::from_column_slice(z),
+    )
+    .unwrap();
+    let mu = b.mode().as_slice().to_vec();
+    let mut c = vec![0.0; d * d];
+    for x in draw(d, m, z, seed, n) {
+        let s = if dot(&mu, &x) < 0.0 { -1.0 } else { 1.0 };
+        let e: Vec<f64> = (0..d).map(|i| s * x[i] - mu[i]).collect();
+        for i in 0..d {
+            for j in 0..d {
+                c[i * d + j] += e[i] * e[j] / n as f64;
+            }
+        }
+    }
+    (mu, c)
+}
+
+/// The Kalman filter adapted as in JAIF Sec. 7: state vector in R^d with identity system and
+/// measurement models, noise covariances from [`gaussian_fit`], the measurement mirrored
+/// (`ẑ ← −ẑ`) when it is more than 90° from the prediction, the estimate normalized after each
+/// update.
+pub struct Kalman {
+    pub d: usize,
+    pub x: DVector<f64>,
+    pub p: DMatrix<f64>,
+    pub q: DMatrix<f64>,
+    pub r: DMatrix<f64>,
+    /// The noise modes (the identity in the scenarios): `x ← x ⊕ μ_w`, `ẑ ≈ x ⊕ μ_v`.
+    pub mu_w: Vec<f64>,
+}
+
+impl Kalman {
+    pub fn new(sc: &Scenario, n: usize) -> Kalman {
+        let d = sc.d;
+        let (x0, p0) = gaussian_fit(d, &sc.m0, &sc.z0, n, 7);
+        let (mu_w, q) = gaussian_fit(d, &sc.mw, &sc.zw, n, 8);
+        let (_, r) = gaussian_fit(d, &sc.mv, &sc.zv, n, 9);
+        Kalman {
+            d,
+            x: DVector::from_vec(x0),
+            p: DMatrix::from_row_slice(d, d, &p0),
+            q: DMatrix::from_row_slice(d, d, &q),
+            r: DMatrix::from_row_slice(d, d, &r),
+            mu_w,
+        }
+    }
+
+    pub fn predict(&mut self) {
+        self.x = DVector::from_vec(compose(self.x.as_slice(), &self.mu_w).unwrap());
+        self.p = &self.p + &self.q;
+    }
+
+    pub fn update(&mut self, z: &[f64]) {
+        let mut zv = DVector::from_column_slice(z);
+        if zv.dot(&self.x) < 0.0 {
+            zv = -zv;
+        }
+        let s = &self.p + &self.r;
+        let k = &self.p * s.try_inverse().unwrap();
+        self.x = &self.x + &k * (zv - &self.x);
+        self.p = (DMatrix::identity(self.d, self.d) - &k) * &self.p;
+        self.p = (&self.p + self.p.transpose()) * 0.5;
+        let n = self.x.norm();
+        self.x /= n;
+    }
+}
+
+/// Runs a fresh copy of `kf` on one simulated run; returns the errors per step.
+pub fn run_kalman(kf: &Kalman, truth: &[Vec<f64>], meas: &[Vec<f64>]) -> Vec<f64> {
+    let mut k = Kalman {
+        d: kf.d,
+        x: kf.x.clone(),
+        p: kf.p.clone(),
+        q: kf.q.clone(),
+        r: kf.r.clone(),
+        mu_w: kf.mu_w.clone(),
+    };
+    let mut errors = Vec::with_capacity(truth.len());
+    for (x, z) in truth.iter().zip(meas) {
+        k.predict();
+        k.update(z);
+        errors.push(axial_error(x, k.x.as_slice()));
+    }
+    errors
+}
