@@ -28,6 +28,13 @@ done
 readelf -d "$lib/libbingham.so.$version" | grep -q "Library soname: \[libbingham.so.$major\]" ||
     fail "SONAME is not libbingham.so.$major"
 
+# exported symbols: exactly the functions the header declares
+declared=$(grep -E '^[a-z].*\bbingham_[a-z0-9_]+\(' "$prefix/include/bingham.h" |
+    grep -oE '\bbingham_[a-z0-9_]+\(' | tr -d '(' | sort -u)
+exported=$(nm -D --defined-only "$lib/libbingham.so.$version" | awk '$2 == "T" && $3 ~ /^bingham_/ {print $3}' | sort -u)
+[ -n "$declared" ] || fail "no declarations found in the header"
+[ "$declared" = "$exported" ] || fail "exported symbols differ from the header: $(diff <(echo "$declared") <(echo "$exported") | grep '^[<>]' | tr '\n' ' ')"
+
 # pkg-config
 export PKG_CONFIG_PATH="$lib/pkgconfig"
 [ "$(pkg-config --modversion bingham)" = "$version" ] || fail "pkg-config --modversion"

@@ -486,11 +486,17 @@ unsafe fn pointwise(
     let b = unsafe { distribution(d, "m", m, "z", z)? };
     // SAFETY: caller contract.
     let xs = unsafe { read("x", x, nd)? };
-    let values = xs
-        .chunks_exact(d)
-        .enumerate()
-        .map(|(i, row)| f(&b, row).map_err(|e| Failure::from(e).context(format_args!("x row {i}"))))
-        .collect::<FfiResult<Vec<f64>>>()?;
+    let mut values = Vec::new();
+    values.try_reserve_exact(n).map_err(|_| {
+        Failure::new(
+            bingham_status::BINGHAM_ERR_NUMERICAL,
+            format!("cannot allocate memory for n = {n} values"),
+        )
+    })?;
+    for (i, row) in xs.chunks_exact(d).enumerate() {
+        let v = f(&b, row).map_err(|e| Failure::from(e).context(format_args!("x row {i}")))?;
+        values.push(v);
+    }
     if n > 0 {
         // SAFETY: p checked non-NULL; n writable doubles.
         unsafe { write(p, &values) };
@@ -656,10 +662,23 @@ pub unsafe extern "C" fn bingham_sample(
         // SAFETY: caller contract.
         let b = unsafe { distribution(d, "m", m, "z", z)? };
         let mut rng = StdRng::seed_from_u64(seed);
-        let samples = b.sample(&mut rng, n);
-        let mut flat = Vec::with_capacity(nd);
-        for s in &samples {
-            flat.extend_from_slice(s.as_slice());
+        // Collect into one buffer, drawing in chunks to bound the peak memory; an allocation
+        // failure (absurd n) is reported instead of aborting the process.
+        let mut flat = Vec::new();
+        flat.try_reserve_exact(nd).map_err(|_| {
+            Failure::new(
+                bingham_status::BINGHAM_ERR_NUMERICAL,
+                format!("cannot allocate memory for n = {n} samples"),
+            )
+        })?;
+        const CHUNK: usize = 4096;
+        let mut left = n;
+        while left > 0 {
+            let k = left.min(CHUNK);
+            for v in b.sample(&mut rng, k) {
+                flat.extend_from_slice(v.as_slice());
+            }
+            left -= k;
         }
         if flat.len() != nd || flat.iter().any(|v| !v.is_finite()) {
             return Err(Failure::new(
