@@ -29,7 +29,6 @@ PC_LIBDIR := $(patsubst $(PREFIX)/%,$${prefix}/%,$(LIBDIR))
 PC_INCLUDEDIR := $(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))
 # what a program linking libbingham.a needs besides the archive (Rust's standard library)
 STATIC_LIBS := -lpthread -ldl -lm
-SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
 
 .PHONY: build header demo test deps fmt-check clippy rust-test python-test install install-test \
         uninstall clean
@@ -60,18 +59,9 @@ test: deps fmt-check clippy build rust-test python-test install-test
 	@echo "make test: all passed"
 
 # Installs what the tests need when it is missing (Debian/Ubuntu): a C++ compiler, Eigen,
-# pkg-config, and NumPy/pytest for the Python binding.
+# pkg-config, binutils, and NumPy/pytest for the Python binding.
 deps:
-	@missing=""; \
-	command -v $(CXX) >/dev/null 2>&1 || missing="$$missing g++"; \
-	[ -f /usr/include/eigen3/Eigen/Dense ] || [ -n "$$EIGEN3_INCLUDE_DIR" ] || missing="$$missing libeigen3-dev"; \
-	command -v pkg-config >/dev/null 2>&1 || missing="$$missing pkg-config"; \
-	command -v readelf >/dev/null 2>&1 || missing="$$missing binutils"; \
-	if [ -n "$$missing" ]; then \
-	  echo "installing:$$missing"; \
-	  $(SUDO) apt-get update && $(SUDO) apt-get install -y $$missing; \
-	fi
-	@$(PYTHON) -c 'import numpy, pytest' 2>/dev/null || $(PYTHON) -m pip install numpy pytest
+	@PYTHON="$(PYTHON)" CXX="$(CXX)" scripts/install-deps.sh
 
 fmt-check:
 	$(CARGO) fmt --check

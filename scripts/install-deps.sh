@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Installs what `make test` needs, only when it is missing (Debian/Ubuntu; run as root or with
+# sudo available): a C++ compiler, Eigen 3, pkg-config, binutils (readelf/nm), Python 3 with
+# pip, and NumPy + pytest for the Python binding's tests.
+set -euo pipefail
+
+python=${PYTHON:-python3}
+cxx=${CXX:-c++}
+sudo=""
+[ "$(id -u)" -eq 0 ] || sudo="sudo"
+
+missing=()
+command -v "$cxx" >/dev/null 2>&1 || missing+=(g++)
+[ -f /usr/include/eigen3/Eigen/Dense ] || [ -n "${EIGEN3_INCLUDE_DIR:-}" ] || missing+=(libeigen3-dev)
+command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)
+command -v readelf >/dev/null 2>&1 && command -v nm >/dev/null 2>&1 || missing+=(binutils)
+command -v "$python" >/dev/null 2>&1 || missing+=(python3)
+if ! "$python" -c 'import numpy, pytest' >/dev/null 2>&1 && ! "$python" -m pip --version >/dev/null 2>&1; then
+    missing+=(python3-pip)
+fi
+if [ ${#missing[@]} -gt 0 ]; then
+    echo "install-deps: installing ${missing[*]}"
+    $sudo apt-get update
+    $sudo apt-get install -y "${missing[@]}"
+fi
+
+if ! "$python" -c 'import numpy, pytest' >/dev/null 2>&1; then
+    echo "install-deps: pip install numpy pytest"
+    # a distribution's own Python may refuse plain `pip install` (PEP 668)
+    "$python" -m pip install numpy pytest ||
+        "$python" -m pip install --break-system-packages numpy pytest
+fi
