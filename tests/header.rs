@@ -92,3 +92,22 @@ fn header_declares_the_api() {
         );
     }
 }
+
+/// The C boundary relies on unwinding: `catch_unwind` in every export turns a panic into
+/// `BINGHAM_ERR_PANIC`. With `panic = "abort"` a bug would kill the host process instead.
+#[test]
+fn panics_unwind() {
+    let manifest =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("Cargo.toml"))
+            .expect("read Cargo.toml");
+    let offending: Vec<&str> = manifest
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.starts_with('#') && l.replace(' ', "").starts_with("panic=\"abort\""))
+        .collect();
+    assert!(
+        offending.is_empty(),
+        "Cargo.toml must not set panic = \"abort\": {offending:?}"
+    );
+    assert!(cfg!(panic = "unwind"));
+}
