@@ -81,6 +81,13 @@
 #define BINGHAM_UNIT_TOL 1e-6
 
 /**
+ * Concentrations of the state and of the process noise below `-BINGHAM_FILTER_MAX_CONCENTRATION`
+ * are raised to it before a prediction (see `bingham_filter_predict()`); an angular spread of
+ * about 7 microradians.
+ */
+#define BINGHAM_FILTER_MAX_CONCENTRATION 1e10
+
+/**
  * The result of every fallible `bingham_*` function.
  *
  * `BINGHAM_OK` (0) means success; every other value is an error, and then the function has
@@ -128,6 +135,30 @@ typedef enum bingham_status {
      */
     BINGHAM_ERR_PANIC = 6,
 } bingham_status;
+
+/**
+ * A recursive Bingham filter for axes in the plane (d = 2) or orientations in space (d = 4,
+ * unit quaternions, scalar first), after Kurz, Gilitschenski, Julier & Hanebeck (JAIF 2014).
+ *
+ * An opaque handle: create it with `bingham_filter_new()` (or `bingham_filter_clone()`),
+ * release it with `bingham_filter_free()`. The caller owns it.
+ *
+ * System model `x[k+1] = x[k] (+) w[k]`, measurement model `z[k] = x[k] (+) v[k]`, where `(+)` is
+ * complex multiplication (d = 2, vectors `(re, im)`) or the Hamilton product (d = 4, quaternions
+ * `(w, x, y, z)`), and the noises `w`, `v` are Bingham distributed. The state is a Bingham
+ * distribution `(M, z)`: M is d x d row-major with orthonormal columns, the last column is the
+ * mode (the estimate; its negative is the same axis / rotation); z ascending with z[d-1] = 0.
+ *
+ * Thread safety: a handle may be used by one thread at a time (functions that take a
+ * `bingham_filter *` modify it; functions taking `const bingham_filter *` may run concurrently
+ * with each other on the same handle). Different handles are fully independent; the library
+ * has no global mutable state.
+ *
+ * Memory: after the first prediction and update with given noise parameters, the filter steps
+ * perform no heap allocation. The noise parameters are cached inside the handle (keyed on their
+ * exact bit patterns), so passing the same noise arrays every step costs nothing extra.
+ */
+typedef struct bingham_filter bingham_filter;
 
 #ifdef __cplusplus
 extern "C" {
@@ -543,6 +574,199 @@ enum bingham_status bingham_rotate_right(size_t d,
  * `m`: d*d and `z`: d readable doubles; `mode`: d writable doubles.
  */
 enum bingham_status bingham_mode(size_t d, const double *m, const double *z, double *mode);
+
+/**
+ * Creates a filter with the initial estimate `Bingham(m0, z0)`.
+ *
+ * - `d`: 2 (axes: complex numbers `(re, im)`) or 4 (unit quaternions, scalar first
+ *   `(w, x, y, z)`). Checked before any array is read.
+ * - `m0`: d x d row-major orthogonal matrix (max |MᵀM - I| <= `BINGHAM_ORTHOGONALITY_TOL`; it
+ *   is re-orthonormalized), columns are the principal directions.
+ * - `z0`: d concentrations, `z0[i]` belongs to column i of `m0`; any order and shift.
+ * - `out`: receives the new handle. Free it with `bingham_filter_free()`.
+ *
+ * Errors: `BINGHAM_ERR_INVALID_DIMENSION` (d not 2 or 4), `BINGHAM_ERR_NULL_ARGUMENT` (`m0`,
+ * `z0`, `out`), `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, `m0` not orthogonal). On error `*out`
+ * is not written.
+ *
+ * # Safety
+ * `m0`: d*d and `z0`: d readable doubles; `out`: a writable `bingham_filter *`.
+ */
+enum bingham_status bingham_filter_new(size_t d,
+                                       const double *m0,
+                                       const double *z0,
+                                       struct bingham_filter **out);
+
+/**
+ * Releases a filter created by `bingham_filter_new()` or `bingham_filter_clone()`. `NULL` is a
+ * no-op. The handle must not be used afterwards.
+ *
+ * # Safety
+ * `f` must be `NULL` or a live handle from this library, not freed before and not in use by
+ * another thread.
+ */
+void bingham_filter_free(struct bingham_filter *f);
+
+/**
+ * Creates an independent copy of a filter (state and cached noise parameters): both then evolve
+ * separately, e.g. for a bank of hypotheses.
+ *
+ * - `f`: the filter to copy; `out`: receives the new handle (free it with
+ *   `bingham_filter_free()`).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `out`). On error `*out` is not written.
+ *
+ * # Safety
+ * `f`: a live handle; `out`: a writable `bingham_filter *`.
+ */
+enum bingham_status bingham_filter_clone(const struct bingham_filter *f,
+                                         struct bingham_filter **out);
+
+/**
+ * The filter's dimension d (2 or 4), the length of its vectors (d) and matrices (d*d).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `d`); then `*d` is not written.
+ *
+ * # Safety
+ * `f`: a live handle; `d`: a writable `size_t`.
+ */
+enum bingham_status bingham_filter_dim(const struct bingham_filter *f, size_t *d);
+
+/**
+ * Replaces the estimate by `Bingham(m, z)` (e.g. to re-initialize); the dimension stays.
+ *
+ * - `m`: d x d row-major orthogonal (within `BINGHAM_ORTHOGONALITY_TOL`), `z`: d concentrations
+ *   (any order and shift), d = `bingham_filter_dim()`.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `m`, `z`), `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf,
+ * `m` not orthogonal). On error the filter is unchanged.
+ *
+ * # Safety
+ * `f`: a live handle; `m`: d*d and `z`: d readable doubles.
+ */
+enum bingham_status bingham_filter_set_state(struct bingham_filter *f,
+                                             const double *m,
+                                             const double *z);
+
+/**
+ * Copies the current estimate `Bingham(M, z)`.
+ *
+ * - `m`: receives M, d x d row-major with orthonormal columns (the principal directions); the
+ *   last column is the mode.
+ * - `z`: receives the d concentrations, ascending, z[d-1] = 0 (column i of M belongs to z[i]).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `m`, `z`); then nothing is written.
+ *
+ * # Safety
+ * `f`: a live handle; `m`: d*d and `z`: d writable doubles.
+ */
+enum bingham_status bingham_filter_get_state(const struct bingham_filter *f, double *m, double *z);
+
+/**
+ * The estimate: the mode of the state, the unit principal direction with the largest
+ * concentration (the last column of M). For d = 4 a unit quaternion, scalar first; for d = 2 a
+ * unit vector `(cos a, sin a)` of the axis angle a. `-mode` describes the same axis / rotation.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `mode`); then nothing is written.
+ *
+ * # Safety
+ * `f`: a live handle; `mode`: d writable doubles.
+ */
+enum bingham_status bingham_filter_mode(const struct bingham_filter *f, double *mode);
+
+/**
+ * Prediction step: the state becomes the distribution of `x (+) w`, `w ~ Bingham(m_w, z_w)`
+ * (JAIF Sec. 6.1: exact second moment of the composition, then the moment-matched Bingham).
+ *
+ * - `m_w`: d x d row-major orthogonal (within `BINGHAM_ORTHOGONALITY_TOL`), `z_w`: d
+ *   concentrations (any order and shift). The mode of the noise may carry a known offset (a
+ *   nominal rotation per step); zero-mean noise has the mode `(1, 0)` resp. `(1, 0, 0, 0)`.
+ *   Typically the same arrays every step: their moments are computed once and cached.
+ *
+ * Concentrations below `-BINGHAM_FILTER_MAX_CONCENTRATION` (state or noise) are raised to it
+ * for this computation, so a very sharp state never makes the prediction fail.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `m_w`, `z_w`), `BINGHAM_ERR_INVALID_ARGUMENT`
+ * (NaN/Inf, `m_w` not orthogonal), `BINGHAM_ERR_NOT_CONVERGED` / `BINGHAM_ERR_NUMERICAL` (moment
+ * matching). On error the filter is unchanged.
+ *
+ * # Safety
+ * `f`: a live handle; `m_w`: d*d and `z_w`: d readable doubles.
+ */
+enum bingham_status bingham_filter_predict(struct bingham_filter *f,
+                                           const double *m_w,
+                                           const double *z_w);
+
+/**
+ * Prediction step with a known rotation: the state becomes the distribution of
+ * `x (+) u (+) w`, `w ~ Bingham(m_w, z_w)`.
+ *
+ * - `u`: d entries, unit length (|‖u‖ - 1| <= `BINGHAM_UNIT_TOL`, then normalized): e.g. the
+ *   rotation increment integrated from a gyroscope over the step (quaternion, scalar first, in
+ *   the body frame: `x (+) u` applies `u` after `x` in the sense of the Hamilton product), or
+ *   `(cos a, sin a)` to turn an axis by a (d = 2). Applied exactly (`x (+) u ~ Bingham(R(u) M, z)`).
+ * - `m_w`, `z_w`: the noise, as in `bingham_filter_predict()`.
+ *
+ * Errors: as `bingham_filter_predict()`, plus `BINGHAM_ERR_NULL_ARGUMENT` (`u`) and
+ * `BINGHAM_ERR_INVALID_ARGUMENT` (`u` NaN/Inf or not unit). On error the filter is unchanged.
+ *
+ * # Safety
+ * `f`: a live handle; `u`: d, `m_w`: d*d and `z_w`: d readable doubles.
+ */
+enum bingham_status bingham_filter_predict_rotation(struct bingham_filter *f,
+                                                    const double *u,
+                                                    const double *m_w,
+                                                    const double *z_w);
+
+/**
+ * Measurement update (Bayes' rule, exact): conditions the state on `measurement = x (+) v`,
+ * `v ~ Bingham(m_v, z_v)` (JAIF Sec. 6.2).
+ *
+ * - `measurement`: d entries, unit length (|‖z‖ - 1| <= `BINGHAM_UNIT_TOL`, then normalized);
+ *   its sign does not matter (an axis / a rotation).
+ * - `m_v`, `z_v`: the measurement noise, d x d row-major orthogonal and d concentrations; its
+ *   mode is usually the identity `(1, 0)` resp. `(1, 0, 0, 0)`. Cached like the process noise.
+ *
+ * Any finite concentration is handled (the state may become arbitrarily sharp).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `measurement`, `m_v`, `z_v`),
+ * `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, measurement not unit, `m_v` not orthogonal),
+ * `BINGHAM_ERR_NUMERICAL` (concentrations overflowing a double). On error the filter is
+ * unchanged.
+ *
+ * # Safety
+ * `f`: a live handle; `measurement`: d, `m_v`: d*d and `z_v`: d readable doubles.
+ */
+enum bingham_status bingham_filter_update(struct bingham_filter *f,
+                                          const double *measurement,
+                                          const double *m_v,
+                                          const double *z_v);
+
+/**
+ * The natural logarithm of the predictive density of a measurement under the current state,
+ * `log p(z) = log ∫ f_state(x) f_v(x^-1 (+) z) dx`, without changing the filter: for gating
+ * (reject measurements with a small value) and for weighting the filters of a bank (the
+ * likelihood of each hypothesis).
+ *
+ * `p` is a probability density of the measurement on the unit sphere S^{d-1} with respect to
+ * the surface measure (it integrates to 1 over the circle, resp. the 3-sphere) and is
+ * antipodally symmetric. Exact (no moment matching involved).
+ *
+ * - `measurement`, `m_v`, `z_v`: as in `bingham_filter_update()`.
+ * - `out`: receives log p.
+ *
+ * Errors: as `bingham_filter_update()`, plus `BINGHAM_ERR_NULL_ARGUMENT` (`out`). On error
+ * `*out` is not written.
+ *
+ * # Safety
+ * `f`: a live handle; `measurement`: d, `m_v`: d*d and `z_v`: d readable doubles; `out`: one
+ * writable double.
+ */
+enum bingham_status bingham_filter_log_likelihood(const struct bingham_filter *f,
+                                                  const double *measurement,
+                                                  const double *m_v,
+                                                  const double *z_v,
+                                                  double *out);
 
 #ifdef __cplusplus
 }  // extern "C"

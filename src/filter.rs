@@ -288,8 +288,7 @@ impl<const D: usize> NoiseCache<D> {
 /// `z` with every entry below `−MAX_CONCENTRATION` raised to it.
 fn capped<const D: usize>(z: &[f64; D]) -> [f64; D] {
     let mut c = *z;
-    c.iter_mut()
-        .for_each(|v| *v = v.max(-MAX_CONCENTRATION));
+    c.iter_mut().for_each(|v| *v = v.max(-MAX_CONCENTRATION));
     c
 }
 

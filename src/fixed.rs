@@ -414,7 +414,12 @@ fn derivs<const D: usize>(z: &[f64; D]) -> Result<Derivs<D>> {
         grad: [0.0; D],
         hess: [0.0; 16],
     };
-    log_normalization_into(z, Method::Exact, Some(&mut d.grad), Some(&mut d.hess[..D * D]))?;
+    log_normalization_into(
+        z,
+        Method::Exact,
+        Some(&mut d.grad),
+        Some(&mut d.hess[..D * D]),
+    )?;
     Ok(d)
 }
 
@@ -646,3 +651,146 @@ pub(crate) fn product_eigen<const D: usize>(
     Ok((v, l))
 }
 
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quaternion::{left_matrix, right_matrix};
+
+    fn xorshift(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed;
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
+    fn unit_random<const D: usize>(r: &mut impl FnMut() -> f64) -> [f64; D] {
+        let mut x = [0.0; D];
+        x.iter_mut().for_each(|v| *v = r());
+        let n = x.iter().map(|v| v * v).sum::<f64>().sqrt();
+        x.iter_mut().for_each(|v| *v /= n);
+        x
+    }
+
+    fn products<const D: usize>() {
+        let mut r = xorshift(7 + D as u64);
+        for _ in 0..50 {
+            let x = unit_random::<D>(&mut r);
+            let y = unit_random::<D>(&mut r);
+            let l = left_matrix(&x);
+            let rm = right_matrix(&y);
+            let (lf, rf) = (left(&x), right(&y));
+            for i in 0..D {
+                for j in 0..D {
+                    assert_eq!(lf[i][j], l[(i, j)]);
+                    assert_eq!(rf[i][j], rm[(i, j)]);
+                }
+            }
+            let p = product(&x, &y);
+            let q = crate::quaternion::compose(&x, &y).unwrap();
+            let rx = mat_vec(&rf, &x);
+            for i in 0..D {
+                assert!((p[i] - q[i]).abs() < 1e-15);
+                assert!((rx[i] - q[i]).abs() < 1e-15);
+            }
+        }
+    }
+
+    #[test]
+    fn product_tables_match_the_quaternion_module() {
+        products::<2>();
+        products::<4>();
+    }
+
+    #[test]
+    fn jacobi_2x2_is_jacobi_in_place() {
+        let mut r = xorshift(3);
+        let mut cases = vec![
+            (1.0, 0.0, 2.0),
+            (1.0, 1e-300, 1.0),
+            (2.0, 3.0, 2.0),
+            (-1e12, 5.0, 0.0),
+        ];
+        for _ in 0..1000 {
+            let s = 10f64.powf(8.0 * r());
+            cases.push((s * r(), s * r() * 10f64.powf(6.0 * r()), s * r()));
+        }
+        for (a, b, c) in cases {
+            let mut v = [0.0; 16];
+            let mut d = [0.0; 4];
+            jacobi_2x2(a, b, c, &mut v, &mut d);
+            let mut m = [a, b, b, c];
+            let (mut v2, mut d2, mut w) = ([0.0; 4], [0.0; 2], [0.0; 4]);
+            jacobi_in_place(2, &mut m, &mut v2, &mut d2, &mut w);
+            assert_eq!(&v[..4], &v2[..], "{a} {b} {c}");
+            assert_eq!(&d[..2], &d2[..], "{a} {b} {c}");
+        }
+    }
+
+    fn solver_matches<const D: usize>(z0: [f64; D]) {
+        let (_, w) = log_f_omega(&z0).unwrap();
+        let (sol, _) = solve_z(&w, Start::Gaussian).unwrap();
+        let mut reference = [0.0; D];
+        crate::mle::solve_z_into(&w, None, &mut reference).unwrap();
+        assert_eq!(sol.z, reference, "cold start, z0 = {z0:?}");
+        // warm start from a nearby solution: same iterates as solve_z_into started there
+        let mut z1 = z0;
+        z1.iter_mut().for_each(|v| *v *= 1.3);
+        let (_, w1) = log_f_omega(&z1).unwrap();
+        let (sol1, _) = solve_z(&w1, Start::Evaluated(&sol)).unwrap();
+        crate::mle::solve_z_into(&w1, Some(&sol.z), &mut reference).unwrap();
+        assert_eq!(sol1.z, reference, "warm start, z1 = {z1:?}");
+        for i in 0..D - 1 {
+            assert!((sol1.z[i] - z1[i]).abs() <= 1e-9 * z1[i].abs().max(1.0));
+        }
+    }
+
+    #[test]
+    fn solver_is_solve_z_into_step_for_step() {
+        solver_matches([-1.0, 0.0]);
+        solver_matches([-150.0, 0.0]);
+        solver_matches([-3e7, 0.0]);
+        solver_matches([-1.0, -1.0, -1.0, 0.0]);
+        solver_matches([-250.0, -180.0, -2.0, 0.0]);
+        solver_matches([-1e6, -1e3, -10.0, 0.0]);
+    }
+
+    #[test]
+    fn composition_of_moments_matches_the_general_path() {
+        let mut r = xorshift(11);
+        for d in [2usize, 4] {
+            for _ in 0..20 {
+                let a = nalgebra::DMatrix::from_fn(d, d, |_, _| r());
+                let b = nalgebra::DMatrix::from_fn(d, d, |_, _| r());
+                let (a, b) = (&a * a.transpose(), &b * b.transpose());
+                let c = crate::distribution::compose_moments(&a, &b);
+                let err = if d == 2 {
+                    let f = |m: &nalgebra::DMatrix<f64>| {
+                        [[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]]
+                    };
+                    let cf = compose_moments::<2>(&f(&a), &f(&b));
+                    (0..4)
+                        .map(|k| (cf[k / 2][k % 2] - c[(k / 2, k % 2)]).abs())
+                        .fold(0.0, f64::max)
+                } else {
+                    let f = |m: &nalgebra::DMatrix<f64>| {
+                        let mut o = [[0.0; 4]; 4];
+                        for i in 0..4 {
+                            for j in 0..4 {
+                                o[i][j] = m[(i, j)];
+                            }
+                        }
+                        o
+                    };
+                    let cf = compose_moments::<4>(&f(&a), &f(&b));
+                    (0..16)
+                        .map(|k| (cf[k / 4][k % 4] - c[(k / 4, k % 4)]).abs())
+                        .fold(0.0, f64::max)
+                };
+                assert!(err < 1e-14, "d = {d}: {err:e}");
+            }
+        }
+    }
+}

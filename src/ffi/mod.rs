@@ -25,9 +25,9 @@ pub mod guard;
 
 pub mod math;
 
-// The recursive Bingham filter (`bingham_filter_*`, an opaque handle; see guard.rs for the
-// handle helpers) goes here as `pub mod filter;`, followed by `pub use filter::*;` below.
+pub mod filter;
 
+pub use filter::*;
 pub use guard::bingham_last_error_message;
 pub use math::*;
 pub use status::{bingham_status, bingham_status_str};

@@ -1,0 +1,436 @@
+//! The recursive Bingham filter behind the opaque handle `bingham_filter` (the C side of
+//! [`crate::filter::BinghamFilter`]). Thin wrappers: check pointers, read and validate the
+//! inputs, call the core, copy results out. The core computes every new state completely before
+//! it assigns it, so a failed call leaves the filter exactly as it was.
+
+use super::guard::{
+    free_handle, guard, handle, handle_mut, need, read, write, write1, write_handle, Failure,
+};
+use super::status::bingham_status;
+use crate::filter::BinghamFilter;
+
+/// Concentrations of the state and of the process noise below `-BINGHAM_FILTER_MAX_CONCENTRATION`
+/// are raised to it before a prediction (see `bingham_filter_predict()`); an angular spread of
+/// about 7 microradians.
+pub const BINGHAM_FILTER_MAX_CONCENTRATION: f64 = 1e10;
+
+/// A recursive Bingham filter for axes in the plane (d = 2) or orientations in space (d = 4,
+/// unit quaternions, scalar first), after Kurz, Gilitschenski, Julier & Hanebeck (JAIF 2014).
+///
+/// An opaque handle: create it with `bingham_filter_new()` (or `bingham_filter_clone()`),
+/// release it with `bingham_filter_free()`. The caller owns it.
+///
+/// System model `x[k+1] = x[k] (+) w[k]`, measurement model `z[k] = x[k] (+) v[k]`, where `(+)` is
+/// complex multiplication (d = 2, vectors `(re, im)`) or the Hamilton product (d = 4, quaternions
+/// `(w, x, y, z)`), and the noises `w`, `v` are Bingham distributed. The state is a Bingham
+/// distribution `(M, z)`: M is d x d row-major with orthonormal columns, the last column is the
+/// mode (the estimate; its negative is the same axis / rotation); z ascending with z[d-1] = 0.
+///
+/// Thread safety: a handle may be used by one thread at a time (functions that take a
+/// `bingham_filter *` modify it; functions taking `const bingham_filter *` may run concurrently
+/// with each other on the same handle). Different handles are fully independent; the library
+/// has no global mutable state.
+///
+/// Memory: after the first prediction and update with given noise parameters, the filter steps
+/// perform no heap allocation. The noise parameters are cached inside the handle (keyed on their
+/// exact bit patterns), so passing the same noise arrays every step costs nothing extra.
+#[allow(non_camel_case_types)]
+pub struct bingham_filter {
+    inner: BinghamFilter,
+}
+
+/// Creates a filter with the initial estimate `Bingham(m0, z0)`.
+///
+/// - `d`: 2 (axes: complex numbers `(re, im)`) or 4 (unit quaternions, scalar first
+///   `(w, x, y, z)`). Checked before any array is read.
+/// - `m0`: d x d row-major orthogonal matrix (max |MᵀM - I| <= `BINGHAM_ORTHOGONALITY_TOL`; it
+///   is re-orthonormalized), columns are the principal directions.
+/// - `z0`: d concentrations, `z0[i]` belongs to column i of `m0`; any order and shift.
+/// - `out`: receives the new handle. Free it with `bingham_filter_free()`.
+///
+/// Errors: `BINGHAM_ERR_INVALID_DIMENSION` (d not 2 or 4), `BINGHAM_ERR_NULL_ARGUMENT` (`m0`,
+/// `z0`, `out`), `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, `m0` not orthogonal). On error `*out`
+/// is not written.
+///
+/// # Safety
+/// `m0`: d*d and `z0`: d readable doubles; `out`: a writable `bingham_filter *`.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_new(
+    d: usize,
+    m0: *const f64,
+    z0: *const f64,
+    out: *mut *mut bingham_filter,
+) -> bingham_status {
+    guard("bingham_filter_new", || {
+        if d != 2 && d != 4 {
+            return Err(Failure::dimension(format!(
+                "the filter exists for d = 2 (axes) and d = 4 (quaternions), got d = {d}"
+            )));
+        }
+        need("m0", m0)?;
+        need("z0", z0)?;
+        need("out", out)?;
+        // SAFETY: caller contract; lengths d*d and d.
+        let (ms, zs) = unsafe { (read("m0", m0, d * d)?, read("z0", z0, d)?) };
+        let inner = BinghamFilter::new(d, ms, zs)?;
+        // SAFETY: `out` checked non-NULL and aligned; written last.
+        unsafe { write_handle(out, bingham_filter { inner }) };
+        Ok(())
+    })
+}
+
+/// Releases a filter created by `bingham_filter_new()` or `bingham_filter_clone()`. `NULL` is a
+/// no-op. The handle must not be used afterwards.
+///
+/// # Safety
+/// `f` must be `NULL` or a live handle from this library, not freed before and not in use by
+/// another thread.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_free(f: *mut bingham_filter) {
+    // Dropping plain data cannot panic; the guard keeps the promise that nothing unwinds into C.
+    let _ = std::panic::catch_unwind(|| {
+        // SAFETY: caller contract.
+        unsafe { free_handle(f) }
+    });
+}
+
+/// Creates an independent copy of a filter (state and cached noise parameters): both then evolve
+/// separately, e.g. for a bank of hypotheses.
+///
+/// - `f`: the filter to copy; `out`: receives the new handle (free it with
+///   `bingham_filter_free()`).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `out`). On error `*out` is not written.
+///
+/// # Safety
+/// `f`: a live handle; `out`: a writable `bingham_filter *`.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_clone(
+    f: *const bingham_filter,
+    out: *mut *mut bingham_filter,
+) -> bingham_status {
+    guard("bingham_filter_clone", || {
+        // SAFETY: caller contract.
+        let filter = unsafe { handle("f", f)? };
+        need("out", out)?;
+        let copy = bingham_filter {
+            inner: filter.inner.clone(),
+        };
+        // SAFETY: `out` checked non-NULL and aligned.
+        unsafe { write_handle(out, copy) };
+        Ok(())
+    })
+}
+
+/// The filter's dimension d (2 or 4), the length of its vectors (d) and matrices (d*d).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `d`); then `*d` is not written.
+///
+/// # Safety
+/// `f`: a live handle; `d`: a writable `size_t`.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_dim(
+    f: *const bingham_filter,
+    d: *mut usize,
+) -> bingham_status {
+    guard("bingham_filter_dim", || {
+        // SAFETY: caller contract.
+        let filter = unsafe { handle("f", f)? };
+        need("d", d)?;
+        // SAFETY: checked non-NULL and aligned; one writable size_t.
+        unsafe { *d = filter.inner.dim() };
+        Ok(())
+    })
+}
+
+/// Replaces the estimate by `Bingham(m, z)` (e.g. to re-initialize); the dimension stays.
+///
+/// - `m`: d x d row-major orthogonal (within `BINGHAM_ORTHOGONALITY_TOL`), `z`: d concentrations
+///   (any order and shift), d = `bingham_filter_dim()`.
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `m`, `z`), `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf,
+/// `m` not orthogonal). On error the filter is unchanged.
+///
+/// # Safety
+/// `f`: a live handle; `m`: d*d and `z`: d readable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_set_state(
+    f: *mut bingham_filter,
+    m: *const f64,
+    z: *const f64,
+) -> bingham_status {
+    guard("bingham_filter_set_state", || {
+        // SAFETY: caller contract.
+        let filter = unsafe { handle_mut("f", f)? };
+        let d = filter.inner.dim();
+        need("m", m)?;
+        need("z", z)?;
+        // SAFETY: caller contract; lengths d*d and d.
+        let (ms, zs) = unsafe { (read("m", m, d * d)?, read("z", z, d)?) };
+        filter.inner.set_state(ms, zs)?;
+        Ok(())
+    })
+}
+
+/// Copies the current estimate `Bingham(M, z)`.
+///
+/// - `m`: receives M, d x d row-major with orthonormal columns (the principal directions); the
+///   last column is the mode.
+/// - `z`: receives the d concentrations, ascending, z[d-1] = 0 (column i of M belongs to z[i]).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `m`, `z`); then nothing is written.
+///
+/// # Safety
+/// `f`: a live handle; `m`: d*d and `z`: d writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_get_state(
+    f: *const bingham_filter,
+    m: *mut f64,
+    z: *mut f64,
+) -> bingham_status {
+    guard("bingham_filter_get_state", || {
+        // SAFETY: caller contract.
+        let filter = unsafe { handle("f", f)? };
+        need("m", m)?;
+        need("z", z)?;
+        let mut mb = [0.0; 16];
+        let mut zb = [0.0; 4];
+        let d = filter.inner.dim();
+        filter.inner.state_into(&mut mb[..d * d], &mut zb[..d])?;
+        // SAFETY: checked pointers; d*d and d writable doubles.
+        unsafe {
+            write(m, &mb[..d * d]);
+            write(z, &zb[..d]);
+        }
+        Ok(())
+    })
+}
+
+/// The estimate: the mode of the state, the unit principal direction with the largest
+/// concentration (the last column of M). For d = 4 a unit quaternion, scalar first; for d = 2 a
+/// unit vector `(cos a, sin a)` of the axis angle a. `-mode` describes the same axis / rotation.
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `mode`); then nothing is written.
+///
+/// # Safety
+/// `f`: a live handle; `mode`: d writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_mode(
+    f: *const bingham_filter,
+    mode: *mut f64,
+) -> bingham_status {
+    guard("bingham_filter_mode", || {
+        // SAFETY: caller contract.
+        let filter = unsafe { handle("f", f)? };
+        need("mode", mode)?;
+        let mut v = [0.0; 4];
+        let d = filter.inner.dim();
+        filter.inner.mode_into(&mut v[..d])?;
+        // SAFETY: checked pointer; d writable doubles.
+        unsafe { write(mode, &v[..d]) };
+        Ok(())
+    })
+}
+
+/// Prediction step: the state becomes the distribution of `x (+) w`, `w ~ Bingham(m_w, z_w)`
+/// (JAIF Sec. 6.1: exact second moment of the composition, then the moment-matched Bingham).
+///
+/// - `m_w`: d x d row-major orthogonal (within `BINGHAM_ORTHOGONALITY_TOL`), `z_w`: d
+///   concentrations (any order and shift). The mode of the noise may carry a known offset (a
+///   nominal rotation per step); zero-mean noise has the mode `(1, 0)` resp. `(1, 0, 0, 0)`.
+///   Typically the same arrays every step: their moments are computed once and cached.
+///
+/// Concentrations below `-BINGHAM_FILTER_MAX_CONCENTRATION` (state or noise) are raised to it
+/// for this computation, so a very sharp state never makes the prediction fail.
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `m_w`, `z_w`), `BINGHAM_ERR_INVALID_ARGUMENT`
+/// (NaN/Inf, `m_w` not orthogonal), `BINGHAM_ERR_NOT_CONVERGED` / `BINGHAM_ERR_NUMERICAL` (moment
+/// matching). On error the filter is unchanged.
+///
+/// # Safety
+/// `f`: a live handle; `m_w`: d*d and `z_w`: d readable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_predict(
+    f: *mut bingham_filter,
+    m_w: *const f64,
+    z_w: *const f64,
+) -> bingham_status {
+    guard("bingham_filter_predict", || {
+        // SAFETY: caller contract.
+        let filter = unsafe { handle_mut("f", f)? };
+        let d = filter.inner.dim();
+        need("m_w", m_w)?;
+        need("z_w", z_w)?;
+        // SAFETY: caller contract; lengths d*d and d.
+        let (ms, zs) = unsafe { (read("m_w", m_w, d * d)?, read("z_w", z_w, d)?) };
+        filter.inner.predict(ms, zs)?;
+        Ok(())
+    })
+}
+
+/// Prediction step with a known rotation: the state becomes the distribution of
+/// `x (+) u (+) w`, `w ~ Bingham(m_w, z_w)`.
+///
+/// - `u`: d entries, unit length (|‖u‖ - 1| <= `BINGHAM_UNIT_TOL`, then normalized): e.g. the
+///   rotation increment integrated from a gyroscope over the step (quaternion, scalar first, in
+///   the body frame: `x (+) u` applies `u` after `x` in the sense of the Hamilton product), or
+///   `(cos a, sin a)` to turn an axis by a (d = 2). Applied exactly (`x (+) u ~ Bingham(R(u) M, z)`).
+/// - `m_w`, `z_w`: the noise, as in `bingham_filter_predict()`.
+///
+/// Errors: as `bingham_filter_predict()`, plus `BINGHAM_ERR_NULL_ARGUMENT` (`u`) and
+/// `BINGHAM_ERR_INVALID_ARGUMENT` (`u` NaN/Inf or not unit). On error the filter is unchanged.
+///
+/// # Safety
+/// `f`: a live handle; `u`: d, `m_w`: d*d and `z_w`: d readable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_predict_rotation(
+    f: *mut bingham_filter,
+    u: *const f64,
+    m_w: *const f64,
+    z_w: *const f64,
+) -> bingham_status {
+    guard("bingham_filter_predict_rotation", || {
+        // SAFETY: caller contract.
+        let filter = unsafe { handle_mut("f", f)? };
+        let d = filter.inner.dim();
+        need("u", u)?;
+        need("m_w", m_w)?;
+        need("z_w", z_w)?;
+        // SAFETY: caller contract; lengths d, d*d and d.
+        let (us, ms, zs) = unsafe {
+            (
+                read("u", u, d)?,
+                read("m_w", m_w, d * d)?,
+                read("z_w", z_w, d)?,
+            )
+        };
+        filter.inner.predict_rotation(us, ms, zs)?;
+        Ok(())
+    })
+}
+
+/// Measurement update (Bayes' rule, exact): conditions the state on `measurement = x (+) v`,
+/// `v ~ Bingham(m_v, z_v)` (JAIF Sec. 6.2).
+///
+/// - `measurement`: d entries, unit length (|‖z‖ - 1| <= `BINGHAM_UNIT_TOL`, then normalized);
+///   its sign does not matter (an axis / a rotation).
+/// - `m_v`, `z_v`: the measurement noise, d x d row-major orthogonal and d concentrations; its
+///   mode is usually the identity `(1, 0)` resp. `(1, 0, 0, 0)`. Cached like the process noise.
+///
+/// Any finite concentration is handled (the state may become arbitrarily sharp).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `measurement`, `m_v`, `z_v`),
+/// `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, measurement not unit, `m_v` not orthogonal),
+/// `BINGHAM_ERR_NUMERICAL` (concentrations overflowing a double). On error the filter is
+/// unchanged.
+///
+/// # Safety
+/// `f`: a live handle; `measurement`: d, `m_v`: d*d and `z_v`: d readable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_update(
+    f: *mut bingham_filter,
+    measurement: *const f64,
+    m_v: *const f64,
+    z_v: *const f64,
+) -> bingham_status {
+    guard("bingham_filter_update", || {
+        // SAFETY: caller contract.
+        let filter = unsafe { handle_mut("f", f)? };
+        let d = filter.inner.dim();
+        need("measurement", measurement)?;
+        need("m_v", m_v)?;
+        need("z_v", z_v)?;
+        // SAFETY: caller contract; lengths d, d*d and d.
+        let (ys, ms, zs) = unsafe {
+            (
+                read("measurement", measurement, d)?,
+                read("m_v", m_v, d * d)?,
+                read("z_v", z_v, d)?,
+            )
+        };
+        filter.inner.update(ys, ms, zs)?;
+        Ok(())
+    })
+}
+
+/// The natural logarithm of the predictive density of a measurement under the current state,
+/// `log p(z) = log ∫ f_state(x) f_v(x^-1 (+) z) dx`, without changing the filter: for gating
+/// (reject measurements with a small value) and for weighting the filters of a bank (the
+/// likelihood of each hypothesis).
+///
+/// `p` is a probability density of the measurement on the unit sphere S^{d-1} with respect to
+/// the surface measure (it integrates to 1 over the circle, resp. the 3-sphere) and is
+/// antipodally symmetric. Exact (no moment matching involved).
+///
+/// - `measurement`, `m_v`, `z_v`: as in `bingham_filter_update()`.
+/// - `out`: receives log p.
+///
+/// Errors: as `bingham_filter_update()`, plus `BINGHAM_ERR_NULL_ARGUMENT` (`out`). On error
+/// `*out` is not written.
+///
+/// # Safety
+/// `f`: a live handle; `measurement`: d, `m_v`: d*d and `z_v`: d readable doubles; `out`: one
+/// writable double.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_log_likelihood(
+    f: *const bingham_filter,
+    measurement: *const f64,
+    m_v: *const f64,
+    z_v: *const f64,
+    out: *mut f64,
+) -> bingham_status {
+    guard("bingham_filter_log_likelihood", || {
+        // SAFETY: caller contract.
+        let filter = unsafe { handle("f", f)? };
+        let d = filter.inner.dim();
+        need("measurement", measurement)?;
+        need("m_v", m_v)?;
+        need("z_v", z_v)?;
+        need("out", out)?;
+        // SAFETY: caller contract; lengths d, d*d and d.
+        let (ys, ms, zs) = unsafe {
+            (
+                read("measurement", measurement, d)?,
+                read("m_v", m_v, d * d)?,
+                read("z_v", z_v, d)?,
+            )
+        };
+        let value = filter.inner.log_likelihood(ys, ms, zs)?;
+        // SAFETY: checked pointer.
+        unsafe { write1(out, value) };
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::filter::MAX_CONCENTRATION;
+
+    #[test]
+    fn max_concentration_matches_core() {
+        assert_eq!(BINGHAM_FILTER_MAX_CONCENTRATION, MAX_CONCENTRATION);
+    }
+
+    #[test]
+    fn handle_lifecycle() {
+        let m = [1.0, 0.0, 0.0, 1.0];
+        let z = [-1.0, 0.0];
+        let mut f: *mut bingham_filter = std::ptr::null_mut();
+        let mut g: *mut bingham_filter = std::ptr::null_mut();
+        let mut d = 0usize;
+        // SAFETY: valid arrays and out-pointers; handles freed once.
+        unsafe {
+            assert_eq!(
+                bingham_filter_new(2, m.as_ptr(), z.as_ptr(), &mut f),
+                bingham_status::BINGHAM_OK
+            );
+            assert_eq!(bingham_filter_clone(f, &mut g), bingham_status::BINGHAM_OK);
+            assert_eq!(bingham_filter_dim(g, &mut d), bingham_status::BINGHAM_OK);
+            assert_eq!(d, 2);
+            bingham_filter_free(f);
+            bingham_filter_free(g);
+            bingham_filter_free(std::ptr::null_mut());
+        }
+    }
+}
