@@ -140,9 +140,11 @@ pub fn run_bingham(sc: &Scenario, truth: &[Vec<f64>], meas: &[Vec<f64>]) -> Vec<
     errors
 }
 
-/// The Gaussian fitted to one mode of a Bingham distribution (JAIF eq. 57, for d = 4
-/// "analogously"): `C = E[(s x − μ)(s x − μ)ᵀ]` with `μ` the mode and `s = sign(μᵀx)`, by
-/// Monte Carlo with `n` samples; returns (μ, C row-major).
+/// The Gaussian fitted to one mode of a Bingham distribution (JAIF eq. 57; for d = 4
+/// "analogously"): `C = E[(s x − μ)(s x − μ)ᵀ]` with `μ` the mode and `s = sign(μᵀx)`; returns
+/// (μ, C row-major). As in `examples/c/*_tracking.c`: for d = 2 by the midpoint rule with 20000
+/// nodes over the half circle around the mode (eq. 57), for d = 4 by Monte Carlo with `n`
+/// samples drawn with `seed`.
 pub fn gaussian_fit(d: usize, m: &[f64], z: &[f64], n: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
     let b = Bingham::new(
         DMatrix::from_row_slice(d, d, m),
@@ -151,6 +153,27 @@ pub fn gaussian_fit(d: usize, m: &[f64], z: &[f64], n: usize, seed: u64) -> (Vec
     .unwrap();
     let mu = b.mode().as_slice().to_vec();
     let mut c = vec![0.0; d * d];
+    if d == 2 {
+        let nodes = 20000;
+        let alpha = mu[1].atan2(mu[0]);
+        let mut mass = 0.0;
+        for i in 0..nodes {
+            let phi = alpha - std::f64::consts::FRAC_PI_2
+                + std::f64::consts::PI * (i as f64 + 0.5) / nodes as f64;
+            let x = [phi.cos(), phi.sin()];
+            let p = b.pdf(&x).unwrap();
+            let e = [x[0] - mu[0], x[1] - mu[1]];
+            mass += p;
+            c[0] += p * e[0] * e[0];
+            c[1] += p * e[0] * e[1];
+            c[3] += p * e[1] * e[1];
+        }
+        c[0] /= mass;
+        c[1] /= mass;
+        c[3] /= mass;
+        c[2] = c[1];
+        return (mu, c);
+    }
     for x in draw(d, m, z, seed, n) {
         let s = if dot(&mu, &x) < 0.0 { -1.0 } else { 1.0 };
         let e: Vec<f64> = (0..d).map(|i| s * x[i] - mu[i]).collect();
