@@ -55,6 +55,7 @@ __all__ = [
     "rotate_left",
     "rotate_right",
     "mode",
+    "Filter",
 ]
 
 MIN_DIM = 2
@@ -118,6 +119,17 @@ _SIGNATURES = {
     "bingham_rotate_left": (_STATUS, [_SIZE, _D, _D, _D, _D, _D]),
     "bingham_rotate_right": (_STATUS, [_SIZE, _D, _D, _D, _D, _D]),
     "bingham_mode": (_STATUS, [_SIZE, _D, _D, _D]),
+    "bingham_filter_new": (_STATUS, [_SIZE, _D, _D, ctypes.POINTER(ctypes.c_void_p)]),
+    "bingham_filter_free": (None, [ctypes.c_void_p]),
+    "bingham_filter_clone": (_STATUS, [ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p)]),
+    "bingham_filter_dim": (_STATUS, [ctypes.c_void_p, ctypes.POINTER(_SIZE)]),
+    "bingham_filter_set_state": (_STATUS, [ctypes.c_void_p, _D, _D]),
+    "bingham_filter_get_state": (_STATUS, [ctypes.c_void_p, _D, _D]),
+    "bingham_filter_mode": (_STATUS, [ctypes.c_void_p, _D]),
+    "bingham_filter_predict": (_STATUS, [ctypes.c_void_p, _D, _D]),
+    "bingham_filter_predict_rotation": (_STATUS, [ctypes.c_void_p, _D, _D, _D]),
+    "bingham_filter_update": (_STATUS, [ctypes.c_void_p, _D, _D, _D]),
+    "bingham_filter_log_likelihood": (_STATUS, [ctypes.c_void_p, _D, _D, _D, _D]),
 }
 
 
@@ -147,7 +159,10 @@ def _load():
             errors.append(f"{path}: {e}")
             continue
         for name, (restype, argtypes) in _SIGNATURES.items():
-            fn = getattr(cdll, name)
+            try:
+                fn = getattr(cdll, name)
+            except AttributeError:  # an older library without this function
+                continue
             fn.restype = restype
             fn.argtypes = argtypes
         return cdll
@@ -403,3 +418,114 @@ def mode(m, z):
     out = np.empty(d)
     _check(lib().bingham_mode(d, _ptr(m), _ptr(z), _ptr(out)))
     return out
+
+
+class Filter:
+    """The recursive Bingham filter (d = 2: axes as ``(re, im)``; d = 4: unit quaternions,
+    scalar first), owning a ``bingham_filter`` handle.
+
+    System ``x[k+1] = x[k] ⊕ w[k]``, measurement ``z[k] = x[k] ⊕ v[k]`` with Bingham noises
+    given as ``(m, z)`` pairs. A failed call raises :class:`BinghamError` and leaves the filter
+    unchanged. Use one filter per thread at a time; :meth:`clone` gives an independent copy.
+    The handle is released by :meth:`close`, by leaving a ``with`` block, or when the object
+    is garbage collected.
+    """
+
+    def __init__(self, m0, z0):
+        d, m0, z0 = _dist(m0, z0, ("m0", "z0"))
+        handle = ctypes.c_void_p()
+        _check(lib().bingham_filter_new(d, _ptr(m0), _ptr(z0), ctypes.byref(handle)))
+        self._handle = handle
+        self.d = d
+
+    @classmethod
+    def _adopt(cls, handle, d):
+        f = cls.__new__(cls)
+        f._handle = handle
+        f.d = d
+        return f
+
+    def _h(self):
+        if self._handle is None:
+            raise ValueError("the filter has been closed")
+        return self._handle
+
+    def close(self):
+        """Releases the handle (idempotent)."""
+        if getattr(self, "_handle", None) is not None:
+            lib().bingham_filter_free(self._handle)
+            self._handle = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:  # interpreter shutdown: the library may be gone already
+            pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+    def clone(self):
+        """An independent copy (state and cached noise parameters)."""
+        handle = ctypes.c_void_p()
+        _check(lib().bingham_filter_clone(self._h(), ctypes.byref(handle)))
+        return Filter._adopt(handle, self.d)
+
+    def dim(self):
+        """The dimension as reported by the library (2 or 4)."""
+        d = _SIZE(0)
+        _check(lib().bingham_filter_dim(self._h(), ctypes.byref(d)))
+        return d.value
+
+    def state(self):
+        """The estimate ``(m, z)``: z ascending with z[-1] = 0, the last column of m the mode."""
+        m = np.empty((self.d, self.d))
+        z = np.empty(self.d)
+        _check(lib().bingham_filter_get_state(self._h(), _ptr(m), _ptr(z)))
+        return m, z
+
+    def set_state(self, m, z):
+        """Replaces the estimate by Bingham(m, z)."""
+        m = _in(m, "m", (self.d, self.d))
+        z = _in(z, "z", (self.d,))
+        _check(lib().bingham_filter_set_state(self._h(), _ptr(m), _ptr(z)))
+
+    def mode(self):
+        """The point estimate (a unit vector; its negative is the same axis / rotation)."""
+        out = np.empty(self.d)
+        _check(lib().bingham_filter_mode(self._h(), _ptr(out)))
+        return out
+
+    def _noise(self, m, z, names):
+        return _in(m, names[0], (self.d, self.d)), _in(z, names[1], (self.d,))
+
+    def predict(self, m_w, z_w):
+        """Prediction with process noise Bingham(m_w, z_w)."""
+        m_w, z_w = self._noise(m_w, z_w, ("m_w", "z_w"))
+        _check(lib().bingham_filter_predict(self._h(), _ptr(m_w), _ptr(z_w)))
+
+    def predict_rotation(self, u, m_w, z_w):
+        """Prediction of ``x ⊕ u ⊕ w`` for a known unit ``u`` (e.g. a gyroscope increment)."""
+        u = _in(u, "u", (self.d,))
+        m_w, z_w = self._noise(m_w, z_w, ("m_w", "z_w"))
+        _check(lib().bingham_filter_predict_rotation(self._h(), _ptr(u), _ptr(m_w), _ptr(z_w)))
+
+    def update(self, measurement, m_v, z_v):
+        """Measurement update with ``measurement = x ⊕ v``, v ~ Bingham(m_v, z_v)."""
+        meas = _in(measurement, "measurement", (self.d,))
+        m_v, z_v = self._noise(m_v, z_v, ("m_v", "z_v"))
+        _check(lib().bingham_filter_update(self._h(), _ptr(meas), _ptr(m_v), _ptr(z_v)))
+
+    def log_likelihood(self, measurement, m_v, z_v):
+        """Log predictive density of a measurement (the filter is not changed)."""
+        meas = _in(measurement, "measurement", (self.d,))
+        m_v, z_v = self._noise(m_v, z_v, ("m_v", "z_v"))
+        out = np.empty(1)
+        _check(
+            lib().bingham_filter_log_likelihood(self._h(), _ptr(meas), _ptr(m_v), _ptr(z_v), _ptr(out))
+        )
+        return float(out[0])

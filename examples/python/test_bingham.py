@@ -73,13 +73,18 @@ class Binding(unittest.TestCase):
     def test_every_exported_function_is_bound(self):
         with open(HEADER, encoding="utf-8") as f:
             header = f.read()
-        declared = set(re.findall(r"^[^*/#\n][^\n]*?\b(bingham_\w+)\(", header, re.M))
+        declared = set(re.findall(r"^[a-z][^\n]*?\b(bingham_\w+)\(", header, re.M))
         self.assertIn("bingham_mle", declared)
-        self.assertEqual(declared, set(bh._SIGNATURES))
+        self.assertEqual(declared, set(bh._SIGNATURES), "bind new functions in bingham.py")
+        # the number of parameters agrees with the header
+        for name, params in re.findall(r"^[a-z][^\n]*?\b(bingham_\w+)\(([^)]*)\)", header, re.M):
+            n = 0 if params.strip() in ("", "void") else params.count(",") + 1
+            self.assertEqual(len(bh._SIGNATURES[name][1]), n, name)
         for name in declared:
             fn = getattr(bh.lib(), name)
-            self.assertIsNotNone(fn.argtypes, name)
-            self.assertIsNotNone(fn.restype, name)
+            restype, argtypes = bh._SIGNATURES[name]
+            self.assertEqual(fn.argtypes, argtypes, name)
+            self.assertIs(fn.restype, restype, name)
 
     def test_version_matches_header(self):
         with open(HEADER, encoding="utf-8") as f:
@@ -309,6 +314,109 @@ class Distribution(unittest.TestCase):
             self.assertIn("orthogonal", cm.exception.message)
         with self.assertRaises(ValueError):
             bh.second_moment(np.eye(2), self.z3)
+
+
+SWAP2 = np.array([[0.0, 1.0], [1.0, 0.0]])  # last column (1, 0): noise centred at the identity
+ANTI4 = np.fliplr(np.eye(4))  # last column (1, 0, 0, 0)
+
+
+def axis_error(a, b):
+    """Angle between two axes (a and -a are the same), d = 2."""
+    c = abs(float(np.dot(a, b)) / (np.linalg.norm(a) * np.linalg.norm(b)))
+    return math.acos(min(1.0, c))
+
+
+class FilterTests(unittest.TestCase):
+    def test_jaif_d2_scenario_tracks_the_truth(self):
+        # JAIF Sec. 7: M0 = I, Z0 = diag(-1, 0), Mw = Mv = [[0, 1], [1, 0]], Zw = diag(-200, 0),
+        # Zv = diag(-2, 0), truth starting at (1, 0); the noises are drawn with bh.sample.
+        zw, zv = np.array([-200.0, 0.0]), np.array([-2.0, 0.0])
+        w = bh.sample(SWAP2, zw, 100, seed=1)
+        v = bh.sample(SWAP2, zv, 100, seed=2)
+        truth = np.array([1.0, 0.0])
+        errors = []
+        with bh.Filter(np.eye(2), [-1.0, 0.0]) as f:
+            self.assertEqual(f.dim(), 2)
+            for k in range(100):
+                f.predict(SWAP2, zw)
+                truth = cmul(truth, w[k])
+                f.update(cmul(truth, v[k]), SWAP2, zv)
+                errors.append(axis_error(f.mode(), truth))
+        rmse = math.sqrt(np.mean(np.square(errors[20:])))
+        self.assertLess(rmse, 0.25)
+
+    def test_update_at_the_mode_adds_concentrations(self):
+        with bh.Filter(np.eye(2), [-5.0, 0.0]) as f:
+            f.update([0.0, 1.0], SWAP2, [-3.0, 0.0])
+            m, z = f.state()
+            np.testing.assert_allclose(z, [-8.0, 0.0], atol=1e-9)
+            self.assertAlmostEqual(abs(f.mode()[1]), 1.0, places=12)
+
+    def test_predict_keeps_the_mode_and_spreads(self):
+        with bh.Filter(np.eye(2), [-50.0, 0.0]) as f:
+            f.predict(SWAP2, [-200.0, 0.0])
+            m, z = f.state()
+            self.assertTrue(-50.0 < z[0] < -30.0)
+            self.assertAlmostEqual(abs(f.mode()[1]), 1.0, places=12)
+
+    def test_predict_rotation_d4(self):
+        q0 = np.array([0.5, 0.5, 0.5, 0.5])
+        m0 = np.linalg.qr(np.column_stack([np.eye(4)[:, :3], q0]))[0]
+        m0[:, 3] = q0
+        m0 = np.linalg.qr(m0)[0]
+        u = np.array([math.cos(0.2), math.sin(0.2), 0.0, 0.0])
+        with bh.Filter(m0, [-100.0, -100.0, -100.0, 0.0]) as f:
+            start = f.mode()
+            f.predict_rotation(u, ANTI4, [-1e6, -1e6, -1e6, 0.0])
+            expected = qmul(start, u)
+            self.assertAlmostEqual(abs(float(np.dot(f.mode(), expected))), 1.0, places=6)
+
+    def test_log_likelihood_is_a_density_of_the_measurement(self):
+        with bh.Filter(rot2(0.4), [-6.0, 0.0]) as f:
+            before = f.state()
+            x, w = circle_nodes(720)
+            total = sum(math.exp(f.log_likelihood(p, SWAP2, [-3.0, 0.0])) for p in x) * w
+            self.assertAlmostEqual(total, 1.0, places=8)
+            after = f.state()
+            np.testing.assert_array_equal(before[0], after[0])
+            np.testing.assert_array_equal(before[1], after[1])
+
+    def test_errors_leave_the_filter_unchanged(self):
+        with bh.Filter(np.eye(2), [-5.0, 0.0]) as f:
+            before = f.state()
+            for call, status, text in (
+                (lambda: f.predict(SWAP2, [math.nan, 0.0]), bh.Status.ERR_INVALID_ARGUMENT, "NaN"),
+                (lambda: f.update([1.0, 0.1], SWAP2, [-2.0, 0.0]), bh.Status.ERR_INVALID_ARGUMENT, "unit"),
+                (lambda: f.update([1.0, 0.0], 1.1 * SWAP2, [-2.0, 0.0]), bh.Status.ERR_INVALID_ARGUMENT, "orthogonal"),
+                (lambda: f.set_state(np.eye(2), [math.inf, 0.0]), bh.Status.ERR_INVALID_ARGUMENT, "inf"),
+            ):
+                with self.assertRaises(bh.BinghamError) as cm:
+                    call()
+                self.assertEqual(cm.exception.status, status)
+                self.assertIn(text, cm.exception.message)
+                self.assertTrue(cm.exception.message.startswith("bingham_filter_"))
+                after = f.state()
+                np.testing.assert_array_equal(before[0], after[0])
+                np.testing.assert_array_equal(before[1], after[1])
+            with self.assertRaises(ValueError):
+                f.predict(np.eye(4), np.zeros(4))
+        with self.assertRaises(bh.BinghamError) as cm:
+            bh.Filter(np.eye(3), [-1.0, -1.0, 0.0])
+        self.assertEqual(cm.exception.status, bh.Status.ERR_INVALID_DIMENSION)
+
+    def test_clone_and_close(self):
+        f = bh.Filter(np.eye(2), [-5.0, 0.0])
+        g = f.clone()
+        g.update([0.0, 1.0], SWAP2, [-3.0, 0.0])
+        self.assertEqual(f.state()[1][0], -5.0)
+        self.assertAlmostEqual(g.state()[1][0], -8.0, places=9)
+        f.close()
+        f.close()
+        with self.assertRaises(ValueError):
+            f.mode()
+        g.set_state(np.eye(2), [0.0, -2.0])
+        self.assertEqual(list(g.state()[1]), [-2.0, 0.0])
+        del g
 
 
 class Threads(unittest.TestCase):
