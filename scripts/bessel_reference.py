@@ -8,9 +8,11 @@ Two jobs, both with mpmath at 50 significant digits (Python 3.11; `pip install m
       i0e = e^-x I0(x), i1e = e^-x I1(x), i0e_minus_i1e = e^-x (I0(x) - I1(x)),
       bessel_q = e^-x (3 I0(x) - 4 I1(x) + I2(x)).
       x is printed with repr (the exact double); every value is the double nearest to the 50-digit
-      value, printed with 17 significant digits (round-trips exactly).  The grid is dense on [0, 64],
-      log-spaced up to 1e7, and brackets every breakpoint of the approximations (the interval
-      boundaries 0.5, 1, ..., 8, 9, ..., 64 and the start of the asymptotic series at 64).
+      value, printed with 17 significant digits (round-trips exactly).  The grid is dense on
+      [0, 140) (steps 1/512 below 8, 1/64 up to 50, 1/16 beyond, plus 2000 pseudo-random points),
+      log-spaced from 50 up to 1e7, and brackets every breakpoint of the approximations (every
+      piece boundary and the start of the asymptotic series at 128, by the neighbouring doubles
+      and by a relative 1e-12).
 
   python3 scripts/bessel_reference.py --update-source src/special.rs
       Regenerates the coefficient tables between the `BEGIN GENERATED` / `END GENERATED` markers
@@ -18,17 +20,19 @@ Two jobs, both with mpmath at 50 significant digits (Python 3.11; `pip install m
       with the coefficients rounded to doubles) to stderr.
 
 Approximation scheme (fitted here from scratch, no third-party coefficient sets):
-  * 0 <= x < 64 is cut into 40 pieces: width 0.5 on [0, 8), then 8 pieces per octave on [8, 64).
-    On a piece with centre c (c = 0 for the first piece [0, 0.5)), each of f = i1e, i0e - i1e and
-    bessel_q is written f(c + t) = f(c) + t g(t): f(c) is stored as a double-double (hi, lo) and the
-    divided difference g is interpolated at NT Chebyshev points (degree NT - 1), then expanded into
-    monomials in t.  For the first piece f(0) = 0, 1, 3 exactly, so i1e keeps full relative accuracy
-    as x -> 0.
-  * x >= 64: the asymptotic series e^-x I_nu(x) ~ (2 pi x)^-1/2 sum_k (-1)^k a_k(nu) x^-k,
+  * 0 <= x < 128 is cut into 96 pieces: width 1/4 on [0, 8), then 16 pieces per octave on [8, 128).
+    On a piece with midpoint c each of f = i1e, i0e - i1e and bessel_q is written
+    f(c + t) = f(c) + t g(t): f(c) is stored as a double-double (hi, lo) and the divided difference g
+    is interpolated at NT = 10 Chebyshev points (degree 9), then expanded into monomials in t.  On
+    the first piece [0, 1/4) the function fitted in place of i1e is i1e(x) / x, so that
+    i1e = x * (...) keeps full relative accuracy as x -> 0.
+  * x >= 128: the asymptotic series e^-x I_nu(x) ~ (2 pi x)^-1/2 sum_k (-1)^k a_k(nu) x^-k,
     a_k(nu) = prod_{j=1..k} (4 nu^2 - (2j - 1)^2) / (k! 8^k), with the coefficients of I0 - I1 and of
     3 I0 - 4 I1 + I2 combined exactly (rational arithmetic) before rounding, so the differences are
-    computed without cancellation.  The number of terms is chosen so that the truncation error at
-    x = 64 is below 1e-17 relative.
+    computed without cancellation.  9, 10 and 11 terms keep the truncation error at x = 128 below
+    1e-17 relative (i0e, i0e - i1e, Q).
+The truncation errors (coefficients rounded to doubles, evaluated exactly) are printed to stderr and
+recorded in the generated block: about 2e-17 relative, i.e. well below half an ulp.
 """
 
 import math
@@ -47,13 +51,16 @@ ROOT = Path(__file__).resolve().parent.parent
 CSV_PATH = ROOT / "tests" / "data" / "bessel_reference.csv"
 
 # Number of coefficients of the divided-difference polynomial g (degree NT - 1; f has degree NT).
-NT = 14
+NT = 10
+# Pieces: width 1 / PIECES_PER_UNIT on [0, 8), PIECES_PER_OCTAVE per octave on [8, X_ASY).
+PIECES_PER_UNIT = 4
+PIECES_PER_OCTAVE = 16
 # Start of the asymptotic series.
-X_ASY = 64.0
+X_ASY = 128.0
 # Number of asymptotic terms (k = 0 .. N - 1) for e^-x I0, for the difference and for Q.
-N_I0 = 11
-N_D = 14
-N_Q = 16
+N_I0 = 9
+N_D = 11
+N_Q = 13
 
 
 # ---------------------------------------------------------------- functions (mpmath)
@@ -81,16 +88,18 @@ def f_q(x):
 
 # ---------------------------------------------------------------- piecewise fits
 def pieces():
-    """(a, b, c): the 40 pieces of [0, 64) and their expansion points."""
+    """(a, b, c): the pieces of [0, X_ASY) and their midpoints (src/special.rs: `piece_index`)."""
     out = []
-    for k in range(16):
-        a, b = k / 2, (k + 1) / 2
-        out.append((a, b, 0.0 if k == 0 else (a + b) / 2))
-    for e in range(3, 6):
-        for m in range(8):
-            a = 2.0**e * (1 + m / 8)
-            b = 2.0**e * (1 + (m + 1) / 8)
+    for k in range(8 * PIECES_PER_UNIT):  # [0, 8)
+        a, b = k / PIECES_PER_UNIT, (k + 1) / PIECES_PER_UNIT
+        out.append((a, b, (a + b) / 2))
+    e = 3
+    while 2.0**e < X_ASY:  # [8, X_ASY), by octaves
+        for m in range(PIECES_PER_OCTAVE):
+            a = 2.0**e * (1 + m / PIECES_PER_OCTAVE)
+            b = 2.0**e * (1 + (m + 1) / PIECES_PER_OCTAVE)
             out.append((a, b, (a + b) / 2))
+        e += 1
     return out
 
 
@@ -207,14 +216,11 @@ def poly_literal(hi, lo, q, indent):
     return lines
 
 
-def max_rel_error(f, hi, lo, q, a, b, c, scale=None):
+def max_rel_error(f, hi, lo, q, a, b, c):
     m = 0
     for k in range(101):
         x = mp.mpf(a) + (b - a) * mp.mpf(k) / 100
-        if x == 0:
-            continue
-        v = eval_piece(hi, lo, q, x - c) * (x if scale else 1)
-        m = max(m, abs(v / (f(x) * (x if scale else 1)) - 1))
+        m = max(m, abs(eval_piece(hi, lo, q, x - c) / f(x) - 1))
     return m
 
 
@@ -229,32 +235,31 @@ def generate():
     for j, (a, b, c) in enumerate(pieces()):
         fits = {}
         for name, f in (("i1e", f_i1e), ("d", f_d), ("q", f_q)):
-            c1 = c
             if name == "i1e" and j == 0:
                 # First piece: i1e = x * G(x - 1/4), G = i1e / x (full relative accuracy at 0).
-                c1 = (a + b) / 2
-                fit = fit_piece(f_i1e_over_x, a, b, c1)
-                m = max_rel_error(f_i1e_over_x, *fit, a, b, c1)
-            else:
-                fit = fit_piece(f, a, b, c)
-                m = max_rel_error(f, *fit, a, b, c)
-            fits[name] = (c1, fit)
+                f = f_i1e_over_x
+            fit = fit_piece(f, a, b, c)
+            m = max_rel_error(f, *fit, a, b, c)
+            fits[name] = fit
             worst[name] = max(worst[name], m)
             print(f"piece [{a}, {b}) {name}: max truncation {float(m):.2e}", file=sys.stderr)
         body.append(f"    // [{a}, {b})")
+        (h1, l1, q1), (hd, ld, qd) = fits["i1e"], fits["d"]
         body.append("    Piece {")
-        body.append(f"        c1: {rust_f64(fits['i1e'][0])},")
-        body.append(f"        cd: {rust_f64(c)},")
-        body += ["        i1: " + l if i == 0 else l for i, l in enumerate(poly_literal(*fits["i1e"][1], 8))]
-        body += ["        d: " + l if i == 0 else l for i, l in enumerate(poly_literal(*fits["d"][1], 8))]
+        body.append(f"        c: {rust_f64(c)},")
+        body.append(f"        hi: [{rust_f64(h1)}, {rust_f64(hd)}],")
+        body.append(f"        lo: [{rust_f64(l1)}, {rust_f64(ld)}],")
+        body.append("        q: [")
+        body += [f"            [{rust_f64(u)}, {rust_f64(v)}]," for u, v in zip(q1, qd)]
+        body.append("        ],")
         body.append("    },")
-        qbody += ["    " + l if i == 0 else l for i, l in enumerate(poly_literal(*fits["q"][1], 4))]
+        qbody += ["    " + l if i == 0 else l for i, l in enumerate(poly_literal(*fits["q"], 4))]
     body.append("];")
-    out.append("// pieces of [0, 64): " + ", ".join(f"{k} {float(v):.1e}" for k, v in worst.items()))
+    out.append(f"// pieces of [0, {X_ASY:g}): " + ", ".join(f"{k} {float(v):.1e}" for k, v in worst.items()))
     print(f"worst truncation over the pieces: { {k: f'{float(v):.2e}' for k, v in worst.items()} }", file=sys.stderr)
 
     c0, cd, cq = asy_coefficients()
-    xs = [X_ASY, X_ASY * (1 + 1e-9), 80.0, 100.0, 1e3, 1e5]
+    xs = [X_ASY, X_ASY * (1 + 1e-9), 1.25 * X_ASY, 1.6 * X_ASY, 1e3, 1e5]
     w = check_asy(c0, cd, cq, xs)
     out.append(f"// asymptotic series, x >= {X_ASY}: i0e {float(w[0]):.1e}, d {float(w[1]):.1e}, q {float(w[2]):.1e}")
     print(f"asymptotic series max truncation for x >= {X_ASY}: i0e {float(w[0]):.2e}, "
@@ -266,13 +271,12 @@ def generate():
         "/// Start of the asymptotic series.",
         f"const X_ASY: f64 = {rust_f64(X_ASY)};",
         "",
-        "/// `[0, 64)`: expansion points, `e^{-x} I1(x)` (`/ x` on the first piece) and",
-        "/// `e^{-x} (I0(x) - I1(x))` per piece.",
+        "/// Per piece of `[0, X_ASY)`, lanes `[e^{-x} I1(x) (/ x on the first piece), e^{-x} (I0(x) - I1(x))]`.",
     ]
     out += body
     out += [
         "",
-        "/// `[0, 64)`: `e^{-x} (3 I0(x) - 4 I1(x) + I2(x))` per piece, expanded at `PIECES[j].cd`.",
+        "/// Per piece of `[0, X_ASY)`: `e^{-x} (3 I0(x) - 4 I1(x) + I2(x))`, expanded at `PIECES[j].c`.",
         "#[rustfmt::skip]",
         f"static Q_PIECES: [Poly; {len(pieces())}] = [",
     ]
@@ -284,7 +288,8 @@ def generate():
         return [f"/// {doc}", f"const {name}_HI: f64 = {rust_f64(hi)};", f"const {name}_LO: f64 = {rust_f64(lo)};"]
 
     def arr(name, vals, doc):
-        lines = [f"/// {doc}", "#[rustfmt::skip]", f"const {name}: [f64; {len(vals)}] = ["]
+        lines = [f"/// {d}" for d in doc.split("\n")] + ["#[rustfmt::skip]", f"const {name}: [f64; NT] = ["]
+        assert len(vals) == NT
         for i in range(0, len(vals), 3):
             lines.append("    " + " ".join(rust_f64(v) + "," for v in vals[i:i + 3]))
         lines.append("];")
@@ -292,11 +297,26 @@ def generate():
 
     out.append("")
     out += hl("ASY_I0", c0[0], "`1/sqrt(2 pi)`: leading coefficient of `sqrt(x) e^{-x} I0(x)`.")
-    out += arr("ASY_I0_TAIL", c0[1:], "`(-1)^k a_k(0) / sqrt(2 pi)`, k = 1, 2, ...")
     out += hl("ASY_D", cd[0], "`1/(2 sqrt(2 pi))`: leading coefficient of `x^{3/2} e^{-x} (I0 - I1)`.")
-    out += arr("ASY_D_TAIL", cd[1:], "`(-1)^k (a_k(0) - a_k(1)) / sqrt(2 pi)`, k = 2, 3, ...")
+    t0, td = c0[1:], cd[1:]
+    n = NT  # zero-padded to the length the Estrin evaluation in src/special.rs expects
+    assert max(len(t0), len(td), len(cq) - 1) <= NT
+    t0 = t0 + [0] * (n - len(t0))
+    td = td + [0] * (n - len(td))
+    out += [
+        "/// Tails of the series in `s = 1/x`, zero-padded: row `k - 1` (k = 1, 2, ...) holds",
+        "/// `(-1)^k a_k(0) / sqrt(2 pi)` (series of `sqrt(x) e^{-x} I0(x)`, coefficient of `s^k`) and",
+        "/// `(-1)^(k+1) (a_(k+1)(0) - a_(k+1)(1)) / sqrt(2 pi)` (series of `x^{3/2} e^{-x} (I0 - I1)`,",
+        "/// coefficient of `s^k`).",
+        "#[rustfmt::skip]",
+        "const ASY_TAIL: [[f64; 2]; NT] = [",
+    ]
+    out += [f"    [{rust_f64(u)}, {rust_f64(v)}]," for u, v in zip(t0, td)]
+    out.append("];")
     out += hl("ASY_Q", cq[0], "`3/(2 sqrt(2 pi))`: leading coefficient of `x^{5/2} Q(x)`.")
-    out += arr("ASY_Q_TAIL", cq[1:], "`(-1)^k (3 a_k(0) - 4 a_k(1) + a_k(2)) / sqrt(2 pi)`, k = 3, 4, ...")
+    out += arr("ASY_Q_TAIL", cq[1:] + [0] * (NT - len(cq) + 1),
+               "`(-1)^k (3 a_k(0) - 4 a_k(1) + a_k(2)) / sqrt(2 pi)`, k = 3, 4, ...: coefficient of\n"
+               "`s^(k-2)` in `x^{5/2} Q(x)` (zero-padded).")
     out.append("// END GENERATED")
     return "\n".join(out) + "\n"
 
@@ -312,17 +332,17 @@ def update_source(path):
 # ---------------------------------------------------------------- reference CSV
 def grid():
     xs = set()
-    xs.update(k / 64 for k in range(0, 64 * 50 + 1))  # dense on [0, 50]
-    state = 12345  # deterministic pseudo-random points on [0, 70)
-    for _ in range(1500):
+    xs.update(k / 512 for k in range(0, 512 * 8))  # dense on [0, 8) (32 pieces) ...
+    xs.update(k / 64 for k in range(64 * 8, 64 * 50 + 1))  # ... on [8, 50] ...
+    xs.update(k / 16 for k in range(16 * 50, 16 * 140))  # ... and on [50, 140)
+    state = 12345  # deterministic pseudo-random points on [0, 140)
+    for _ in range(2000):
         state = (6364136223846793005 * state + 1442695040888963407) % 2**64
-        xs.add((state >> 11) / 2**53 * 70.0)
+        xs.add((state >> 11) / 2**53 * 140.0)
     n = 600  # log-spaced on [50, 1e7]
     xs.update(50.0 * (2e5) ** (i / (n - 1)) for i in range(n))
     xs.update([1e-300, 1e-100, 1e-20, 1e-10, 1e-5, 1e-3, 0.1, 1e7])
-    breaks = [k / 2 for k in range(1, 17)] + [float(b) for b in range(9, 17)]
-    breaks += [2.0**e * (1 + m / 8) for e in (4, 5, 6) for m in range(8)]
-    breaks += [7.75, 500.0, 1000.0]
+    breaks = sorted({b for _, b, _ in pieces()} | {X_ASY, 7.75, 500.0, 1000.0})
     for b in breaks:
         xs.update([b, math.nextafter(b, 0.0), math.nextafter(b, math.inf), b * (1 - 1e-12), b * (1 + 1e-12)])
     return sorted(v for v in xs if v <= 1e7)
