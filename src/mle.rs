@@ -144,7 +144,8 @@ fn cholesky_solve(k: usize, a: &mut [f64], b: &mut [f64]) -> bool {
         for p in 0..j {
             s -= a[j * k + p] * a[j * k + p];
         }
-        if !(s > 0.0) {
+        // (written to also reject NaN)
+        if s.is_nan() || s <= 0.0 {
             return false;
         }
         let l = s.sqrt();

@@ -305,8 +305,8 @@ fn integrate_counted<const M: usize>(
     }
     let log_f = c.ln() + sums.f.ln();
     let mut omega = [0.0; 4];
-    for i in 0..d {
-        omega[i] = sums.m[i] / sums.f;
+    for (o, m) in omega.iter_mut().zip(sums.m.iter()).take(d) {
+        *o = m / sums.f;
     }
     if let Some(g) = grad {
         g.copy_from_slice(&omega[..d]);
