@@ -64,6 +64,8 @@ pub struct BinghamFilter {
     inner: Inner,
 }
 
+// Not boxed: the variants are plain arrays and boxing would add an indirection to every step.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 enum Inner {
     D2(Core<2>),

@@ -5,14 +5,19 @@
 //! `j`) and mirrors the general (heap-allocating, `nalgebra::DMatrix`) code of
 //! [`crate::distribution`] and [`crate::mle`] step by step, so the two paths agree to rounding:
 //! validation and normalization of parameters (`Bingham::new`), second moments, the composition
-//! of moments, the symmetric eigendecomposition (the same Jacobi routine), the moment-matching
-//! MLE (the same allocation-free Newton solver, [`crate::mle::solve_z_into`]) and the Bayes
-//! product. `tests/filter.rs` checks the agreement.
+//! of moments, the symmetric eigendecomposition (the same Jacobi routine; for `D = 2` its single
+//! rotation written out), the moment-matching MLE (the algorithm of `mle::solve_z_into` step for
+//! step, able to resume from a previous solution whose derivatives are known) and the Bayes
+//! product. The unit tests below check bitwise agreement of the building blocks, `tests/filter.rs`
+//! the agreement of whole filter steps with the general path.
 //!
 //! Products use the multiplication tables of ℂ and ℍ (scalar first): `L(x)_{ik} = s_{ik} x_{i⊻k}`
 //! with the sign tables below (`⊻` is bitwise xor), so `x ⊕ y = L(x) y`,
 //! `x ⊕ u = R(u) x` with `R(u)_{ij} = s_{i,i⊻j} u_{i⊻j}`, and the basis matrices
 //! `L_a = L(e_a)` are signed permutations: `(L_a)_{i,i⊻a} = s_{i,i⊻a}`.
+
+// Index loops mirror the matrix formulas (and the general path) more clearly than iterators.
+#![allow(clippy::needless_range_loop)]
 
 use crate::distribution::{ORTHOGONALITY_TOL, UNIT_TOL};
 use crate::error::{Error, Result};
@@ -286,7 +291,7 @@ pub(crate) fn unit<const D: usize>(what: &str, x: &[f64]) -> Result<[f64; D]> {
     }
     check_finite(what, x)?;
     let n = x.iter().map(|v| v * v).sum::<f64>().sqrt();
-    if !((n - 1.0).abs() <= UNIT_TOL) {
+    if n.is_nan() || (n - 1.0).abs() > UNIT_TOL {
         return Err(Error::InvalidArgument(format!(
             "`{what}` must be a unit vector: its norm is {n} (tolerance {UNIT_TOL})"
         )));
@@ -442,7 +447,7 @@ fn cholesky_solve(k: usize, a: &mut [f64], b: &mut [f64]) -> bool {
         for p in 0..j {
             s -= a[j * k + p] * a[j * k + p];
         }
-        if !(s > 0.0) {
+        if s.is_nan() || s <= 0.0 {
             return false;
         }
         let l = s.sqrt();

@@ -60,15 +60,10 @@ fn assert_state_close(f: &BinghamFilter, b: &Bingham, tol: f64, what: &str) {
     let d = f.dim();
     let (m, z) = state_of(f);
     let scale = b.z().amax().max(1.0);
-    for i in 0..d {
+    for (i, (&zi, &bi)) in z.iter().zip(b.z().iter()).enumerate() {
         // eigenvalues are accurate relative to the largest one
-        let rel = (z[i] - b.z()[i]).abs() / b.z()[i].abs().max(1e-2 * scale).max(1.0);
-        assert!(
-            rel <= tol,
-            "{what}: z[{i}] = {} vs {} (rel {rel:e})",
-            z[i],
-            b.z()[i]
-        );
+        let rel = (zi - bi).abs() / bi.abs().max(1e-2 * scale).max(1.0);
+        assert!(rel <= tol, "{what}: z[{i}] = {zi} vs {bi} (rel {rel:e})");
     }
     let p = precision(d, &m, &z);
     let q = precision(d, &b.m_row_major(), b.z().as_slice());
