@@ -3,9 +3,9 @@
 //! With sorted `z1 ≤ z2 = 0` and `x = −z1/2 ≥ 0`: `F = 2π I0e(x)` where `I0e(x) = e^{−x} I0(x)`,
 //! `ω1 = (I0e − I1e)/(2 I0e)` (the difference taken without cancellation), `ω2 = 1 − ω1`
 //! computed as `(I0e + I1e)/(2 I0e)`.
-//! Second derivatives: `∂²F/∂z1² = F·E[x1⁴]` with `E[cos⁴]` over the von Mises-type circle
-//! density `= Q(x)/(8 I0e)`, `Q = e^{−x}(3I0 − 4I1 + I2)`; `E[x1²x2²] = (I0e − I2e)/(8 I0e) = I1e/(4x I0e)`;
-//! `E[x2⁴] = (3I0e + 4I1e + I2e)/(8 I0e)`.
+//! Second derivatives: `∂²F/∂z1² = F·E[x1⁴]` with `E[x1⁴] = Q(x)/(8 I0e)`,
+//! `Q = e^{−x}(3I0 − 4I1 + I2)` (evaluated without cancellation); the rest of the Hessian of
+//! `log F` follows from `ω1 + ω2 = 1`.
 
 use crate::error::Result;
 use crate::special::{bessel_q, i01e};
@@ -26,15 +26,15 @@ pub(crate) fn log_f_sorted(
         g[1] = w2;
     }
     if let Some(h) = hess {
-        // E[x1^4], E[x1^2 x2^2], E[x2^4] on the circle.
-        let i2 = if x > 0.0 { i0 - 2.0 * i1 / x } else { 0.0 };
+        // H11 = E[x1⁴] − ω1² (no cancellation: E[x1⁴] ≈ 3ω1² when concentrated); since
+        // ω1 + ω2 = 1 the other entries follow: H12 = H21 = −H11, H22 = H11 (computing
+        // E[x2⁴] − ω2² directly would cancel catastrophically when x2² ≈ 1).
         let e11 = bessel_q(x) / (8.0 * i0);
-        let e12 = if x > 0.0 { i1 / (4.0 * x * i0) } else { 0.125 };
-        let e22 = (3.0 * i0 + 4.0 * i1 + i2) / (8.0 * i0);
-        h[0] = e11 - w1 * w1;
-        h[1] = e12 - w1 * w2;
-        h[2] = h[1];
-        h[3] = e22 - w2 * w2;
+        let h11 = e11 - w1 * w1;
+        h[0] = h11;
+        h[1] = -h11;
+        h[2] = -h11;
+        h[3] = h11;
     }
     Ok(log_f)
 }
