@@ -1,6 +1,111 @@
-//! Exact `F(Z)` for any d: Laplace inversion along the steepest-descent contour.
+//! Exact `F(Z)`, ω and the Hessian of `log F` for any d: Laplace inversion along the
+//! steepest-descent contour (used by the dispatcher for d ≥ 5; correct for every d ≥ 1).
 //!
-//! (docs: see the end of development)
+//! # Representation (Kume & Wood 2005)
+//! With `λ_i = c − z_i > 0` for any `c > max z`, on the sphere `xᵀZx = c − Σ λ_i x_i²`, and
+//!
+//! `F(Z) = e^c · 2π^{d/2} · Π λ_i^{−1/2} · f_R(1)`,
+//!
+//! where `f_R` is the density of `R = Σ y_i²/(2λ_i)`, `y_i` iid N(0, 1), whose Laplace transform is
+//! `M(s) = Π (1 + s/λ_i)^{−1/2}`. Hence `f_R(1) = (1/2πi) ∫_{Br} e^{φ(s)} ds` with
+//! `φ(s) = s − ½ Σ log(1 + s/λ_i)`.
+//!
+//! # The contour
+//! `c` is chosen such that the real saddle point of `φ` is `s = 0`, i.e. `½ Σ 1/(c − z_i) = 1`
+//! (`solve_shift`: Newton's method on a concave increasing function, monotone from below;
+//! `c ∈ [½, d/2]`). Then `φ(0) = 0`, `φ''(0) = ½ Σ λ_i^{−2} ∈ [2/d, 2]`: every problem, whatever
+//! the scale of `z`, is mapped to one with a saddle of width O(1) to O(√d).
+//!
+//! For fixed `y > 0`, `Im φ(x + iy) = y − ½ Σ arg(λ_i + x + iy)` increases strictly in `x`
+//! from `y − dπ/2` to `y`. So `{Im φ = 0}` in the upper half plane is one curve
+//! `x = X(y)`, `0 < y < dπ/2`, leaving `s = 0` vertically and running to `Re s → −∞`; along it
+//! `Im φ' = ∂_x Im φ > 0` and `dφ/dy = −|φ'|²/Im φ' < 0`: `φ` is real and decreases strictly
+//! from 0 to −∞ — it is the steepest-descent path. With the lower half (the mirror image) and
+//! the parametrization `φ(s(w)) = −w²`,
+//!
+//! `f_R(1) = (1/π) Im ∫_{upper half} e^{φ} ds = (1/π) ∫_0^∞ e^{−w²} y'(w) dw`, `y = Im s`.
+//!
+//! For every `w > 0`, `φ(s) = −w²` has exactly one root in the open upper half plane (the
+//! curve is the only place where `φ` is real, and `φ` is monotone on it). The root is found by
+//! complex Newton iteration (principal logarithms computed as `log1p` without cancellation;
+//! an iterate that leaves the half plane is reflected, as `φ(s̄) = conj φ(s)`), started from a
+//! second-order Taylor predictor (path following, with step halving if Newton fails) or, for
+//! the nodes of a refined level, from the cubic Hermite interpolant of both neighbours. A root
+//! in the half plane cannot be a wrong one, so there is no branch-jumping to guard against.
+//!
+//! # Quadrature
+//! `e^{−w²} y'(w)` is even and analytic in a strip around the real `w` axis (its nearest
+//! singularities are the images of the other saddle points of `φ`, all real and negative,
+//! between the `−λ_i`), so the trapezoidal rule converges geometrically, error
+//! `~ e^{−2πa/h}`. The rule is nested: `h = 2⁻¹, 2⁻², …, 2⁻¹⁰` on `[0, 7]`; the computation stops
+//! at the first level at which **every** integral (F, each ω group, each Hessian integral)
+//! changed by at most `1e-13` relative from the previous level (the Hessian's `δ`-integrals
+//! below are measured against at least 1e-3 of their natural size, as they may vanish); in
+//! the geometric regime the error of the accepted level is about the square of that change.
+//! Typically 29–225 nodes (more for clusters of near-equal `λ` such as `(−40, −39, …, −34, 0)`
+//! or near-ties; 449 at most in the stress tests); the hard limit is 7169, beyond which
+//! `Error::NotConverged` is returned (never observed).
+//!
+//! # Derivatives: differentiation under the integral
+//! `F = 2π^{d/2} (1/2πi) ∫ e^u Π (u − z_i)^{−1/2} du`, so `∂F/∂z_i` is the same integral with the
+//! factor `½/(u − z_i) = ½/(λ_i + s)` — this *is* the Kume–Wood identity
+//! `∂F/∂z_i = F_{d+2}(z_i three times)/(2π)`, evaluated on the d-dimensional contour instead of
+//! a (d+2)-dimensional one (both are checked against each other in the tests). On the path
+//! `Im[e^{φ} ds/(λ_i + s)] = e^{φ} dθ_i`, `θ_i = arg(λ_i + s)`, and `½ Σ θ_i = y`, so
+//!
+//! `ω_i = ∫ e^{−w²} ½ θ_i'(w) dw / ∫ e^{−w²} y'(w) dw`,  `Σ ω_i = 1` by construction.
+//!
+//! `dθ_i = ((λ_i + x) − y x'(y)) dy/|λ_i + s|²` is positive wherever the path (along which `x`
+//! decreases) lies right of `−λ_i`; further left the weight is below about `e^{−λ_i}`. Measured
+//! over 2000 random problems (1.1 million path points), the negative parts of any ω-integrand
+//! are below 2e-8 of its positive part: no cancellation, and tiny `ω_i` (≈ `1/(2|z_i|)`) get
+//! the same relative accuracy as `F`.
+//!
+//! Second moments use `¼(1 + 2δ_ij)/((λ_i + s)(λ_j + s))` (the identity with `F_{d+4}`):
+//! `E[x_i⁴] = 3L(r_i²/4)` with `r_i = 1/(λ_i + s)` and `L` the normalized contour functional
+//! (real-linear, `L(1) = 1`), so `H_ii = E[x_i⁴] − ω_i²`. Off the diagonal the direct
+//! `E[x_i² x_j²] − ω_i ω_j` cancels badly for two concentrated directions (the covariance is
+//! ~1e-12 of the terms at `z = −1e6`); instead, with `δ_i = ½(r_i − 1/λ_i) = −½ s r_i/λ_i`
+//! (no cancellation) and `ε_i = L(δ_i) = ω_i − 1/(2λ_i)`, the exact rewriting
+//! `H_ij = L(δ_i δ_j) − ε_i ε_j` is used. The mode's variance comes from the zero row sum
+//! `Σ_j H_dj = 0`, avoiding the cancellation in `E[x_d⁴] − ω_d²` when the mode
+//! carries nearly all the mass. Tied `z` values are grouped and evaluated once.
+//!
+//! # Accuracy (measured) and error bound
+//! * Against 30-digit Laplace inversions on Talbot's contour (mpmath `invertlaplace`, an
+//!   independent contour and quadrature, checked with a second shift at 34 digits; ω from the
+//!   same inversion of `F_{d+2}(z_i three times)/(2π F)`), 198 random cases, d = 2…64,
+//!   `|z_i|` log-uniform in `[1e-3, 1e6]` with ties and repeated zeros (some moderate
+//!   `[0, 30]`): max `|Δ log F| = 7.1e-15` (≈ 1 ulp of `log F`), max relative error of ω
+//!   `1.9e-15`. Fixed levels on the same set: `h = ¼` (29 nodes) `7e-6`, `h = ⅛` (57)
+//!   `2.5e-9`, `h = 1/16` (113) `9e-15`. The 7 hardest cases are in the unit tests.
+//! * 1200 stress cases (clusters, exact and 1e-6-near ties, `|z|` from 1e-10 to 1e10, d up to
+//!   64): no failure, at most 449 nodes, production vs. a fixed `h = 2⁻⁷` rule ≤ 1.4e-14.
+//! * d = 2 closed form (`2π I0e(−z1/2)`), z₁ ∈ [−1e6, −1e-10]: `|Δ log F| ≤ 9e-16`, ω `6e-16`.
+//! * The high-precision files `tests/data/normalization_d{2..8}.csv` (557 rows, `|z|` to 1e6):
+//!   `|Δ log F| ≤ 3.6e-15`, ω ≤ 2.0e-15 relative.
+//! * d = 3, 4 brute-force sphere quadrature (|z| ≤ 30): agreement to the reference's own
+//!   accuracy (`3e-14`); z = 0: `|S^{d−1}|` and the exact moments for d = 1…68. d = 5…8:
+//!   nested sphere quadratures (`tests/general_d.rs`), `|z|` up to 1e6: ≤ 7e-15.
+//! * Hessian against the same files (all d = 2…8 rows): `|ΔH_ij| ≤ 6.4e-15 √(H_ii H_jj)`;
+//!   entries relative to themselves ≤ 2e-11 (second-order-small covariances of tied
+//!   concentrated directions; 3e-3 with the direct `E − ωω` form); also the exact moments at
+//!   `z = 0`, the identity with `F_{d+4}`, central differences of ω.
+//! * Bound: the tail beyond `w = 7` is below `e^{−49}·dπ/2 < 1e-19` relative to
+//!   `I = ∫ e^{−w²} y' ≳ √π/2`; the discretization error is below the accepted change `1e-13`
+//!   and in practice (geometric convergence) below `1e-15`; rounding: path points are solved to
+//!   `|Δs| ≤ 1e-9 (1 + |s|)` and then polished by one more (quadratically convergent) Newton
+//!   step, `φ'` is evaluated as `(1 − ½Σ1/λ) + (s/2) Σ 1/(λ(λ + s))` (no cancellation near
+//!   the saddle), `log F` is summed with compensation. Net: relative error of `F` and of every
+//!   `ω_i` ≤ 1e-14 for `|z| ≤ 1e6` (far inside the 1e-12 target); finite results for any
+//!   finite input (tested to `|z| = 1e300`).
+//!
+//! # Cost
+//! Per node one Newton solve (2–4 evaluations of `φ`, i.e. `log1p`, `atan2` and a complex
+//! reciprocal per distinct `z`), plus O(d) (O(d²) with the Hessian) multiply-adds. Measured
+//! (release, CPU time, mean over random `z` with `|z_i|` in `[1e-3, 1e6]`): log F + ω ≈ 80 µs
+//! (d = 5), 80 µs (d = 8), 120 µs (d = 16), 190 µs (d = 64); with the Hessian 110, 130, 80,
+//! 620 µs (its integrals sometimes need one more level).
 
 use crate::error::{Error, Result};
 use std::f64::consts::PI;
@@ -85,12 +190,12 @@ fn clog1p(u: Cx) -> Cx {
 const H0: f64 = 0.5;
 /// Number of coarsest steps: the rule covers `w ∈ [0, H0·N0] = [0, 7]`; `e^{−49} < 6e-22`.
 const N0: usize = 14;
-/// Maximum number of step halvings (finest step 0.5/2⁸, 1793 nodes).
-const MAX_LEVEL: usize = 8;
+/// Maximum number of step halvings (finest step 0.5/2⁹, 7169 nodes).
+const MAX_LEVEL: usize = 9;
 /// Accept a level when every integral changed by at most this (relative) from the previous one.
 const TOL: f64 = 1e-13;
 /// Maximal recursion depth of the step subdivision in path following.
-const MAX_DEPTH: u32 = 24;
+const MAX_DEPTH: u32 = 12;
 
 /// A point of the contour: `w`, `s(w)`, `s'(w)`, `s''(w)`.
 #[derive(Clone, Copy, Debug)]
@@ -221,10 +326,20 @@ impl Contour {
         self.march(&mid, w1, depth - 1)
     }
 
-    /// Adds `weight · e^{−w²} ·` the integrands at `node` to `sums`:
-    /// `½ Im(s' r_j)` for each group (first `G` entries) and, with `hess`,
-    /// `¼ Im(s' r_j r_k)` for `j ≤ k` (packed row by row). `r_j = 1/(λ_j + s)`.
-    fn accumulate(&self, node: &Node, weight: f64, r: &mut [Cx], sums: &mut [f64], hess: bool) {
+    /// Adds `weight · e^{−w²} ·` the integrands at `node` to `sums` (`r_j = 1/(λ_j + s)`,
+    /// `δ_j = ½(r_j − 1/λ_j) = −½ s r_j/λ_j`, computed without cancellation):
+    /// `[0, G)`: `½ Im(s' r_j)` (ω); with `hess` also `[G, 2G)`: `Im(s' δ_j)`;
+    /// `[2G, 3G)`: `¼ Im(s' r_j²)` (`E[x⁴]/3`); `[3G, …)`: `Im(s' δ_j δ_k)`, `j ≤ k`, packed
+    /// row by row.
+    fn accumulate(
+        &self,
+        node: &Node,
+        weight: f64,
+        r: &mut [Cx],
+        dl: &mut [Cx],
+        sums: &mut [f64],
+        hess: bool,
+    ) {
         let g = self.lam.len();
         let t = node.ds.scale(weight * (-node.w * node.w).exp());
         for (rj, &l) in r.iter_mut().zip(&self.lam) {
@@ -234,11 +349,20 @@ impl Contour {
             *sj += 0.5 * (t * rj).im;
         }
         if hess {
-            let mut idx = g;
+            let half_s = node.s.scale(-0.5);
+            for ((dj, &rj), &il) in dl.iter_mut().zip(r.iter()).zip(&self.inv_lam) {
+                *dj = (half_s * rj).scale(il);
+            }
             for j in 0..g {
-                let u = (t * r[j]).scale(0.25);
-                for rk in &r[j..] {
-                    sums[idx] += u.re * rk.im + u.im * rk.re;
+                let u = t * dl[j];
+                sums[g + j] += u.im;
+                sums[2 * g + j] += 0.25 * (t * r[j] * r[j]).im;
+            }
+            let mut idx = 3 * g;
+            for j in 0..g {
+                let u = t * dl[j];
+                for dk in &dl[j..] {
+                    sums[idx] += u.re * dk.im + u.im * dk.re;
                     idx += 1;
                 }
             }
@@ -246,12 +370,36 @@ impl Contour {
     }
 }
 
-/// Solves `½ Σ m_j/(c − z_j) = 1` for `c > max z = 0` (`z` distinct, ascending, last 0).
+/// Neumaier's compensated summation.
+#[derive(Default)]
+struct Neumaier {
+    sum: f64,
+    comp: f64,
+}
+
+impl Neumaier {
+    fn add(&mut self, x: f64) {
+        let t = self.sum + x;
+        if self.sum.abs() >= x.abs() {
+            self.comp += (self.sum - t) + x;
+        } else {
+            self.comp += (x - t) + self.sum;
+        }
+        self.sum = t;
+    }
+
+    fn sum(&self) -> f64 {
+        self.sum + self.comp
+    }
+}
+
+/// Solves `½ Σ m_j/(c − z_j) = 1` for `c > 0`, where `z` is ascending with last entry
+/// `0 = max z` and `m_j ≥ 1` are multiplicities (`Σ m_j` is the dimension).
 ///
 /// `G(c) = 2/Σ m_j/(c − z_j) − 1` is a harmonic mean of linear functions minus one, hence
 /// concave and increasing; Newton's method started at `c₀ = m_last/2` (where `G ≤ 0`) climbs
-/// monotonically to the root. The root lies in `[m_last/2, d/2]`.
-fn solve_shift(z: &[f64], mult: &[f64]) -> Result<f64> {
+/// monotonically to the root. The root lies in `[m_last/2, (Σ m_j)/2]`.
+pub(crate) fn solve_shift(z: &[f64], mult: &[f64]) -> Result<f64> {
     let mut c = 0.5 * mult[mult.len() - 1];
     for _ in 0..200 {
         let (mut s1, mut s2) = (0.0, 0.0);
@@ -262,7 +410,7 @@ fn solve_shift(z: &[f64], mult: &[f64]) -> Result<f64> {
         }
         let g = 2.0 / s1 - 1.0;
         let step = -g * s1 * s1 / (2.0 * s2);
-        if !(step > 4.0 * f64::EPSILON * c) {
+        if step.is_nan() || step <= 4.0 * f64::EPSILON * c {
             if c.is_finite() && c > 0.0 {
                 return Ok(c);
             }
@@ -275,6 +423,7 @@ fn solve_shift(z: &[f64], mult: &[f64]) -> Result<f64> {
 
 /// Everything the general method computes (sorted order, as the input).
 #[derive(Debug, Clone)]
+#[cfg_attr(not(test), allow(dead_code))]
 pub(crate) struct GeneralEval {
     /// `log F(z)`.
     pub log_f: f64,
@@ -284,10 +433,41 @@ pub(crate) struct GeneralEval {
     pub hess: Vec<f64>,
     /// Number of contour points used.
     pub nodes: usize,
-    /// Largest relative change of any integral between the last two trapezoidal levels.
-    pub last_change: f64,
     /// The relative change at each refinement level.
     pub changes: Vec<f64>,
+}
+
+/// Scales against which the change of each integral is measured: its own size, but for the
+/// Hessian's auxiliary integrals (`δ` terms, which may be near zero by cancellation inside the
+/// integral) at least 1e-3 of their natural size (`ω`-integral/`λ`, and products thereof).
+fn natural_scales(first: &[f64], inv_lam: &[f64], hess: bool) -> Vec<f64> {
+    let g = inv_lam.len();
+    let mut scale = vec![0.0; first.len()];
+    if hess {
+        let total: f64 = first[..g].iter().map(|v| v.abs()).sum();
+        let nat: Vec<f64> = (0..g).map(|j| first[j].abs() * inv_lam[j]).collect();
+        for j in 0..g {
+            scale[g + j] = 1e-3 * nat[j];
+        }
+        let mut idx = 3 * g;
+        for j in 0..g {
+            for k in j..g {
+                scale[idx] = 1e-3 * nat[j] * nat[k] / total;
+                idx += 1;
+            }
+        }
+    }
+    scale
+}
+
+/// Largest change between two levels, relative to each integral's size (at least `scale`, and
+/// at least 1e-250: values that small only need absolute accuracy).
+fn max_change(cur: &[f64], prev: &[f64], scale: &[f64]) -> f64 {
+    cur.iter()
+        .zip(prev)
+        .zip(scale)
+        .map(|((c1, c0), s)| (c1 - c0).abs() / c1.abs().max(*s).max(1e-250))
+        .fold(0.0, f64::max)
 }
 
 /// The quadrature schedule.
@@ -370,21 +550,23 @@ pub(crate) fn evaluate_with(
     };
 
     let hess = want_hess;
-    let nint = g + if hess { g * (g + 1) / 2 } else { 0 };
+    let nint = g + if hess { 3 * g + g * (g + 1) / 2 } else { 0 };
     let mut sums = vec![0.0; nint];
     let mut r = vec![Cx::new(0.0, 0.0); g];
+    let mut dl = vec![Cx::new(0.0, 0.0); g];
 
     // Level 0: march out from the saddle point.
     let mut nodes: Vec<Node> = Vec::with_capacity(N0 + 1);
     nodes.push(ct.origin());
-    ct.accumulate(&nodes[0], 0.5, &mut r, &mut sums, hess);
+    ct.accumulate(&nodes[0], 0.5, &mut r, &mut dl, &mut sums, hess);
     for k in 1..=N0 {
         let next = ct.march(&nodes[k - 1], H0 * k as f64, MAX_DEPTH)?;
-        ct.accumulate(&next, 1.0, &mut r, &mut sums, hess);
+        ct.accumulate(&next, 1.0, &mut r, &mut dl, &mut sums, hess);
         nodes.push(next);
     }
     let mut h = H0;
     let mut prev: Vec<f64> = sums.iter().map(|v| v * h).collect();
+    let scale = natural_scales(&prev, &ct.inv_lam, hess);
     let mut change = f64::INFINITY;
     let mut changes = Vec::new();
     let mut result: Option<Vec<f64>> = None;
@@ -404,21 +586,14 @@ pub(crate) fn evaluate_with(
                 Some(s) => ct.node(wm, s)?,
                 None => ct.march(l, wm, MAX_DEPTH)?,
             };
-            ct.accumulate(&mid, 1.0, &mut r, &mut sums, hess);
+            ct.accumulate(&mid, 1.0, &mut r, &mut dl, &mut sums, hess);
             refined.push(*l);
             refined.push(mid);
         }
         refined.push(*nodes.last().expect("nonempty"));
         nodes = refined;
         let cur: Vec<f64> = sums.iter().map(|v| v * h).collect();
-        change = cur
-            .iter()
-            .zip(&prev)
-            .map(|(c1, c0)| {
-                let den = c1.abs().max(f64::MIN_POSITIVE);
-                (c1 - c0).abs() / den
-            })
-            .fold(0.0, f64::max);
+        change = max_change(&cur, &prev, &scale);
         changes.push(change);
         if change <= rule.tol || (rule.accept_at_max && level == rule.max_level) {
             result = Some(cur);
@@ -438,10 +613,18 @@ pub(crate) fn evaluate_with(
     if !(total > 0.0 && total.is_finite()) {
         return Err(Error::Numerical("contour integral is not positive".into()));
     }
-    let sum_log_lam: f64 = ct.lam.iter().zip(&ct.mult).map(|(l, m)| m * l.ln()).sum();
-    let log_f = zmax + c + (2.0f64).ln() + 0.5 * d as f64 * PI.ln() - 0.5 * sum_log_lam
-        + total.ln()
-        - PI.ln();
+    // log F = z_max + c + log 2 + (d/2) log π − ½ Σ m_j log λ_j + log I − log π, summed with
+    // compensation (the terms reach hundreds for large d and |z|).
+    let mut acc = Neumaier::default();
+    for (l, m) in ct.lam.iter().zip(&ct.mult) {
+        acc.add(-0.5 * m * l.ln());
+    }
+    acc.add(zmax);
+    acc.add(c);
+    acc.add(std::f64::consts::LN_2);
+    acc.add(0.5 * (d as f64 - 2.0) * PI.ln());
+    acc.add(total.ln());
+    let log_f = acc.sum();
     if !log_f.is_finite() {
         return Err(Error::Numerical("log F is not finite".into()));
     }
@@ -454,9 +637,12 @@ pub(crate) fn evaluate_with(
     let mut hmat = Vec::new();
     if want_hess {
         hmat = vec![0.0; d * d];
-        // Offsets of the packed rows (j, j..g).
+        // ε_j = L(δ_j) = ω_j − 1/(2λ_j); for a ≠ b, Cov(x_a², x_b²) = E[x_a² x_b²] − ω_a ω_b
+        // = L(δ_j δ_k) − ε_j ε_k (L the normalized contour functional, real-linear with
+        // L(1) = 1): no cancellation between the ~ω_a ω_b-sized terms of the direct form.
+        let eps: Vec<f64> = (0..g).map(|j| t[g + j] / total).collect();
         let mut offs = vec![0usize; g];
-        let mut o = g;
+        let mut o = 3 * g;
         for (j, off) in offs.iter_mut().enumerate() {
             *off = o;
             o += g - j;
@@ -464,19 +650,17 @@ pub(crate) fn evaluate_with(
         for i in 0..d {
             for k in 0..d {
                 let (gi, gk) = (group_of[i], group_of[k]);
-                let (j0, j1) = if gi <= gk { (gi, gk) } else { (gk, gi) };
-                let e = t[offs[j0] + (j1 - j0)] / total * if i == k { 3.0 } else { 1.0 };
-                hmat[i * d + k] = e - grad[i] * grad[k];
+                hmat[i * d + k] = if i == k {
+                    3.0 * t[2 * g + gi] / total - grad[i] * grad[i]
+                } else {
+                    let (j0, j1) = if gi <= gk { (gi, gk) } else { (gk, gi) };
+                    t[offs[j0] + (j1 - j0)] / total - eps[gi] * eps[gk]
+                };
             }
         }
-        // The last row/column from the zero row sums (Σ_k ∂ω_i/∂z_k = 0), which avoids the
-        // cancellation in E[x_i² x_d²] − ω_i ω_d when the mode carries almost all the mass.
+        // The mode's variance from the zero row sum (Σ_k ∂ω_i/∂z_k = 0): E[x_d⁴] − ω_d² cancels
+        // when the mode carries almost all the mass.
         let l = d - 1;
-        for i in 0..l {
-            let s: f64 = (0..l).map(|k| hmat[i * d + k]).sum();
-            hmat[i * d + l] = -s;
-            hmat[l * d + i] = -s;
-        }
         let s: f64 = (0..l).map(|i| hmat[i * d + l]).sum();
         hmat[l * d + l] = -s;
         if hmat.iter().any(|v| !v.is_finite()) {
@@ -488,7 +672,6 @@ pub(crate) fn evaluate_with(
         grad: if want_grad { grad } else { Vec::new() },
         hess: hmat,
         nodes: nodes.len(),
-        last_change: change,
         changes,
     })
 }
@@ -507,4 +690,578 @@ pub(crate) fn log_f_sorted(
         hs.copy_from_slice(&ev.hess);
     }
     Ok(ev.log_f)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Tanh–sinh (double-exponential) rule on [−1, 1] with step `h`: `(1 + x, 1 − x, w)`,
+    /// the distances to both ends computed without cancellation.
+    fn tanh_sinh(h: f64) -> Vec<(f64, f64, f64)> {
+        let mut out = Vec::new();
+        let n = (4.0 / h).ceil() as i64;
+        for k in -n..=n {
+            let u = k as f64 * h;
+            let v = 0.5 * PI * u.sinh();
+            // 1 ± tanh v = 2/(1 + e^{∓2v}); weight (π/2) cosh u / cosh² v.
+            let (ap, am) = (
+                2.0 / (1.0 + (-2.0 * v).exp()),
+                2.0 / (1.0 + (2.0 * v).exp()),
+            );
+            let w = h * 0.5 * PI * u.cosh() * ap * am;
+            if w > 1e-300 {
+                out.push((ap, am, w));
+            }
+        }
+        out
+    }
+
+    /// `I0e(x)` and `I0e(x) − I1e(x)` for `x ≥ 0` from `I_ν(x) = (1/π)∫₀^π e^{x cos t} cos νt dt`
+    /// by the trapezoidal rule (periodic analytic integrand: the aliasing error is about
+    /// `e^{−2N²/x}`, here below `e^{−200}`).
+    fn bessel_ref(x: f64) -> (f64, f64) {
+        let n = (10.0 * x.sqrt()).ceil() as usize + 40;
+        let h = PI / n as f64;
+        let (mut s0, mut s1) = (0.0, 0.0);
+        for k in 0..=n {
+            let t = k as f64 * h;
+            let wt = if k == 0 || k == n { 0.5 } else { 1.0 };
+            let one_minus_cos = 2.0 * (0.5 * t).sin().powi(2);
+            let e = (-x * one_minus_cos).exp();
+            s0 += wt * e;
+            s1 += wt * e * one_minus_cos;
+        }
+        (s0 / n as f64, s1 / n as f64)
+    }
+
+    /// `log |S^{d−1}| = log(2π^{d/2}/Γ(d/2))` by the recursion `|S^{d−1}| = 2π/(d−2) |S^{d−3}|`.
+    fn log_sphere_area(d: usize) -> f64 {
+        let mut area: f64 = if d % 2 == 1 { 2.0 } else { 2.0 * PI };
+        let mut k = if d % 2 == 1 { 1 } else { 2 };
+        while k < d {
+            area *= 2.0 * PI / k as f64;
+            k += 2;
+        }
+        area.ln()
+    }
+
+    fn rel(a: f64, b: f64) -> f64 {
+        ((a - b) / b).abs()
+    }
+
+    #[test]
+    fn d2_closed_form() {
+        let mut worst = (0.0f64, 0.0f64);
+        for z1 in [
+            -1e-10, -1e-3, -0.3, -1.0, -2.5, -7.5, -40.0, -123.4, -1e3, -1e4, -3e5, -1e6,
+        ] {
+            let e = evaluate_sorted(&[z1, 0.0], true, false).unwrap();
+            let x = -0.5 * z1;
+            let (i0e, dm) = bessel_ref(x);
+            let log_f = (2.0 * PI).ln() + i0e.ln();
+            let w1 = dm / (2.0 * i0e);
+            let w2 = (2.0 * i0e - dm) / (2.0 * i0e);
+            let (ef, ew) = (
+                (e.log_f - log_f).abs(),
+                rel(e.grad[0], w1).max(rel(e.grad[1], w2)),
+            );
+            worst = (worst.0.max(ef), worst.1.max(ew));
+            assert!(ef < 2e-14 && ew < 2e-14, "z1 = {z1}: {ef:e} {ew:e}");
+        }
+        println!(
+            "d = 2 vs closed form: max |Δ log F| = {:.1e}, max rel Δω = {:.1e}",
+            worst.0, worst.1
+        );
+    }
+
+    #[test]
+    fn zero_is_the_sphere_area_with_exact_moments() {
+        for d in 1..=68 {
+            let z = vec![0.0; d];
+            let e = evaluate_sorted(&z, true, d <= 16).unwrap();
+            let exact = log_sphere_area(d);
+            assert!(
+                (e.log_f - exact).abs() < 4e-15 * exact.abs().max(1.0),
+                "d = {d}"
+            );
+            for &w in &e.grad {
+                assert!(rel(w, 1.0 / d as f64) < 1e-14, "d = {d}");
+            }
+            if (2..=16).contains(&d) {
+                // E[x_i⁴] = 3/(d(d+2)), E[x_i² x_j²] = 1/(d(d+2)).
+                let df = d as f64;
+                for i in 0..d {
+                    for k in 0..d {
+                        let e4 = if i == k { 3.0 } else { 1.0 } / (df * (df + 2.0));
+                        let h = e4 - 1.0 / (df * df);
+                        assert!((e.hess[i * d + k] - h).abs() < 1e-15, "d = {d} ({i},{k})");
+                    }
+                }
+            }
+        }
+    }
+
+    /// Deterministic pseudo-random numbers in [0, 1) (xorshift).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+        /// Sorted z with `z_d = 0`, log-uniform magnitudes in [1e-3, 10^max_exp], some ties.
+        fn z(&mut self, d: usize, max_exp: f64) -> Vec<f64> {
+            let mut z: Vec<f64> = (0..d - 1)
+                .map(|_| -(10f64).powf(-3.0 + (max_exp + 3.0) * self.next()))
+                .collect();
+            z.push(0.0);
+            z.sort_by(f64::total_cmp);
+            for k in 1..d - 1 {
+                if self.next() < 0.15 {
+                    z[k] = z[k - 1];
+                }
+            }
+            z
+        }
+    }
+
+    #[test]
+    fn omega_sums_to_one_and_shift_invariance() {
+        let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+        for d in [2, 3, 4, 5, 6, 7, 8, 12, 20, 33, 64] {
+            for _ in 0..6 {
+                let z = rng.z(d, 6.0);
+                let e = evaluate_sorted(&z, true, false).unwrap();
+                let s: f64 = e.grad.iter().sum();
+                assert!((s - 1.0).abs() < 1e-14, "d = {d}: Σω − 1 = {:e}", s - 1.0);
+                assert!(e.grad.iter().all(|&w| w > 0.0 && w < 1.0));
+                // F(Z + cI) = e^c F(Z) (the shifted input is rounded, hence the tolerance).
+                for c in [-37.25, 1000.5] {
+                    let zs: Vec<f64> = z.iter().map(|v| v + c).collect();
+                    let es = evaluate_sorted(&zs, true, false).unwrap();
+                    assert!(
+                        (es.log_f - c - e.log_f).abs() < 1e-12 * (1.0 + c.abs()),
+                        "d = {d}"
+                    );
+                    for (a, b) in es.grad.iter().zip(&e.grad) {
+                        assert!(rel(*a, *b) < 1e-9, "d = {d}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// Brute force over S² in `(t, φ)`, `x = (√(1−t²) cos φ, √(1−t²) sin φ, t)` (area element
+    /// `dt dφ`): tanh–sinh in `t`, trapezoidal (periodic) in `φ`. Returns `log F` and `ω`.
+    fn brute_d3(z: [f64; 3], h: f64, nphi: usize) -> (f64, [f64; 3]) {
+        let mut f = Neumaier::default();
+        let mut m: [Neumaier; 3] = Default::default();
+        for (ap, am, w) in tanh_sinh(h) {
+            let t = 0.5 * (ap - am);
+            let r2 = ap * am; // 1 − t²
+            for k in 0..nphi {
+                let phi = 2.0 * PI * k as f64 / nphi as f64;
+                let x2 = [r2 * phi.cos().powi(2), r2 * phi.sin().powi(2), t * t];
+                let e = (z[0] * x2[0] + z[1] * x2[1] + z[2] * x2[2]).exp() * w;
+                f.add(e);
+                for i in 0..3 {
+                    m[i].add(e * x2[i]);
+                }
+            }
+        }
+        let f = f.sum();
+        let h = 2.0 * PI / nphi as f64;
+        (
+            (f * h).ln(),
+            [m[0].sum() / f, m[1].sum() / f, m[2].sum() / f],
+        )
+    }
+
+    #[test]
+    fn d3_against_brute_force_sphere_quadrature() {
+        let cases = [
+            [-1.0, -0.5, 0.0],
+            [-5.0, -5.0, 0.0],
+            [-30.0, -2.0, 0.0],
+            [-30.0, -29.0, 0.0],
+            [-12.0, 0.0, 0.0],
+            [-0.01, -0.001, 0.0],
+        ];
+        for z in cases {
+            let (lf, om) = brute_d3(z, 1.0 / 32.0, 256);
+            let (lf2, om2) = brute_d3(z, 1.0 / 24.0, 200);
+            assert!(
+                (lf - lf2).abs() < 1e-14,
+                "reference not converged for {z:?}: {:e}",
+                lf - lf2
+            );
+            let e = evaluate_sorted(&z, true, false).unwrap();
+            assert!((e.log_f - lf).abs() < 3e-14, "{z:?}: {} vs {lf}", e.log_f);
+            for i in 0..3 {
+                assert!(
+                    rel(e.grad[i], om[i]) < 3e-14,
+                    "{z:?} ω{i}: {} vs {}",
+                    e.grad[i],
+                    om[i]
+                );
+                assert!(rel(om[i], om2[i]) < 1e-14);
+            }
+        }
+    }
+
+    /// Brute force over S³ with `x = (√u cos α, √u sin α, √(1−u) cos β, √(1−u) sin β)`,
+    /// surface measure `½ du dα dβ`: tanh–sinh in `u`, trapezoidal in `α`, `β`.
+    fn brute_d4(z: [f64; 4], h: f64, nang: usize) -> (f64, [f64; 4]) {
+        let trig: Vec<(f64, f64)> = (0..nang)
+            .map(|k| {
+                let a = 2.0 * PI * k as f64 / nang as f64;
+                (a.cos().powi(2), a.sin().powi(2))
+            })
+            .collect();
+        let mut f = Neumaier::default();
+        let mut m: [Neumaier; 4] = Default::default();
+        for (ap, am, w) in tanh_sinh(h) {
+            let (u, v) = (0.5 * ap, 0.5 * am); // u ∈ [0, 1], v = 1 − u
+            for &(ca, sa) in &trig {
+                for &(cb, sb) in &trig {
+                    let x2 = [u * ca, u * sa, v * cb, v * sb];
+                    let e = (z[0] * x2[0] + z[1] * x2[1] + z[2] * x2[2] + z[3] * x2[3]).exp()
+                        * (0.5 * w);
+                    f.add(e);
+                    for i in 0..4 {
+                        m[i].add(e * x2[i]);
+                    }
+                }
+            }
+        }
+        let h = 2.0 * PI / nang as f64;
+        let f = f.sum();
+        let m = [m[0].sum(), m[1].sum(), m[2].sum(), m[3].sum()];
+        (
+            (0.5 * f * h * h).ln(),
+            [m[0] / f, m[1] / f, m[2] / f, m[3] / f],
+        )
+    }
+
+    #[test]
+    fn d4_against_brute_force_sphere_quadrature() {
+        let cases = [
+            [-1.0, -0.7, -0.2, 0.0],
+            [-20.0, -10.0, -3.0, 0.0],
+            [-15.0, -15.0, -15.0, 0.0],
+            [-8.0, -8.0, 0.0, 0.0],
+        ];
+        for z in cases {
+            let (lf, om) = brute_d4(z, 1.0 / 16.0, 96);
+            let (lf2, _) = brute_d4(z, 1.0 / 12.0, 80);
+            assert!(
+                (lf - lf2).abs() < 1e-14,
+                "reference not converged for {z:?}: {:e}",
+                lf - lf2
+            );
+            let e = evaluate_sorted(&z, true, false).unwrap();
+            assert!((e.log_f - lf).abs() < 3e-14, "{z:?}: {} vs {lf}", e.log_f);
+            for (i, (&w, &r)) in e.grad.iter().zip(&om).enumerate() {
+                assert!(rel(w, r) < 3e-14, "{z:?} ω{i}: {} vs {}", e.grad[i], om[i]);
+            }
+        }
+    }
+
+    /// Consistency, not an independent reference: the gradient is computed by differentiating
+    /// under the integral on the d-dimensional contour; the Kume–Wood identity evaluates the
+    /// same quantity as `F_{d+2}(z_i three times)/(2π F)` on the (d+2)-dimensional contour,
+    /// with different nodes and a different path. Likewise the Hessian with `F_{d+4}`.
+    #[test]
+    fn derivatives_agree_with_the_kume_wood_identities() {
+        let mut rng = Rng(12345);
+        let log_2pi = (2.0 * PI).ln();
+        for d in [2, 3, 4, 5, 6, 8, 64] {
+            for _ in 0..3 {
+                let z = rng.z(d, 6.0);
+                let e = evaluate_sorted(&z, true, d <= 8).unwrap();
+                for i in 0..d {
+                    let mut zz = z.clone();
+                    zz.insert(i, z[i]);
+                    zz.insert(i, z[i]);
+                    let up = evaluate_sorted(&zz, false, false).unwrap();
+                    let w = (up.log_f - e.log_f - log_2pi).exp();
+                    assert!(
+                        rel(e.grad[i], w) < 2e-13,
+                        "d = {d} i = {i}: {} vs {w}",
+                        e.grad[i]
+                    );
+                }
+                if d > 8 {
+                    continue;
+                }
+                for i in 0..d {
+                    for k in i..d {
+                        let mut zz = z.clone();
+                        if i == k {
+                            zz.extend([z[i]; 4]);
+                        } else {
+                            zz.extend([z[i], z[i], z[k], z[k]]);
+                        }
+                        zz.sort_by(f64::total_cmp);
+                        let up = evaluate_sorted(&zz, false, false).unwrap();
+                        let factor = if i == k { 3.0 } else { 1.0 };
+                        let e4 = factor * (up.log_f - e.log_f - 2.0 * log_2pi).exp();
+                        let h = e4 - e.grad[i] * e.grad[k];
+                        let tol = 1e-12 * e4 + 1e-15;
+                        assert!(
+                            (e.hess[i * d + k] - h).abs() < tol.max(1e-9 * h.abs()),
+                            "d = {d} ({i},{k}): {} vs {h}",
+                            e.hess[i * d + k]
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn hessian_matches_finite_differences_of_omega() {
+        for z in [
+            vec![-3.0, -1.0, -0.5, 0.0],
+            vec![-50.0, -20.0, -20.0, -1.0, 0.0],
+            vec![-1e4, -30.0, -2.0, -1.0, -1.0, 0.0],
+        ] {
+            let d = z.len();
+            let e = evaluate_sorted(&z, true, true).unwrap();
+            for k in 0..d - 1 {
+                // Perturb z_k (keeping the order) and difference ω.
+                let hstep = 1e-5 * (1.0 + z[k].abs());
+                let (mut zp, mut zm) = (z.clone(), z.clone());
+                zp[k] += hstep;
+                zm[k] -= hstep;
+                let (mut ip, mut im) = ((0..d).collect::<Vec<_>>(), (0..d).collect::<Vec<_>>());
+                ip.sort_by(|&a, &b| zp[a].total_cmp(&zp[b]));
+                im.sort_by(|&a, &b| zm[a].total_cmp(&zm[b]));
+                let sp: Vec<f64> = ip.iter().map(|&a| zp[a]).collect();
+                let sm: Vec<f64> = im.iter().map(|&a| zm[a]).collect();
+                let ep = evaluate_sorted(&sp, true, false).unwrap();
+                let em = evaluate_sorted(&sm, true, false).unwrap();
+                let mut gp = vec![0.0; d];
+                let mut gm = vec![0.0; d];
+                for (pos, &a) in ip.iter().enumerate() {
+                    gp[a] = ep.grad[pos];
+                }
+                for (pos, &a) in im.iter().enumerate() {
+                    gm[a] = em.grad[pos];
+                }
+                for i in 0..d {
+                    let fd = (gp[i] - gm[i]) / (2.0 * hstep);
+                    let h = e.hess[i * d + k];
+                    assert!(
+                        (fd - h).abs() < 1e-6 * h.abs() + 1e-11,
+                        "{z:?} H[{i}][{k}] = {h} vs FD {fd}"
+                    );
+                }
+            }
+            // Symmetric, zero row sums.
+            for i in 0..d {
+                let s: f64 = (0..d).map(|k| e.hess[i * d + k]).sum();
+                assert!(s.abs() < 1e-15, "row sum {s:e}");
+                for k in 0..d {
+                    assert_eq!(e.hess[i * d + k], e.hess[k * d + i]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn extreme_and_mixed_scales_stay_finite_and_consistent() {
+        let cases: Vec<Vec<f64>> = vec![
+            vec![-1e6, -1e6, -3.0, -1e-3, 0.0],
+            vec![-1e300, 0.0],
+            vec![-1e300, -1e150, -1e12, -1.0, 0.0],
+            vec![-1e-300, 0.0, 0.0],
+            vec![-1.0 - 1e-12, -1.0, -1.0 + 1e-12, -1e-15, 0.0],
+            vec![-5.0, -5.0 + 1e-9, 0.0],
+            (0..64).map(|i| -1e8 * (63 - i) as f64).collect(),
+            (0..64)
+                .map(|i| -(10f64).powf(6.0 * (63 - i) as f64 / 63.0) + 1.0)
+                .collect(),
+        ];
+        for z in cases {
+            let e = evaluate_sorted(&z, true, true).unwrap();
+            assert!(e.log_f.is_finite());
+            let s: f64 = e.grad.iter().sum();
+            assert!((s - 1.0).abs() < 1e-14);
+            assert!(e.hess.iter().all(|v| v.is_finite()));
+            // Concentrated directions: ω_i → 1/(2|z_i|) as z_i → −∞.
+            for (&zi, &w) in z.iter().zip(&e.grad) {
+                if zi < -1e12 {
+                    assert!(rel(w, -0.5 / zi) < 1e-9, "z = {zi}: ω = {w}");
+                }
+            }
+        }
+        // The mixed example against a 30-digit reference (mpmath Talbot inversion).
+        let e = evaluate_sorted(&[-1e6, -1e6, -3.0, -1e-3, 0.0], true, false).unwrap();
+        assert!((e.log_f - -10.824_678_891_188_215).abs() < 1e-14);
+        let om = [
+            4.999_999_755_601_424e-7,
+            4.999_999_755_601_424e-7,
+            0.150_231_905_925_283_15,
+            0.424_788_771_985_015_2,
+            0.424_978_322_089_750_5,
+        ];
+        for (i, (&w, &r)) in e.grad.iter().zip(&om).enumerate() {
+            assert!(rel(w, r) < 1e-14, "ω{i}: {w} vs {r}");
+        }
+    }
+
+    /// Hard cases (the slowest quadrature convergence among 145 random ones) against 25-digit
+    /// values from an independent method: Laplace inversion on Talbot's contour in mpmath at
+    /// 30 digits (`mp.invertlaplace(M, 1, method="talbot")`, F recovered as in the module docs),
+    /// cross-checked with a second shift `c` at 34 digits; ω from the same inversion of
+    /// `F_{d+2}(z_i three times)/(2π F)`. Columns: `d, z_1..z_d, log F, ω_1..ω_d`.
+    const TALBOT: [&str; 7] = [
+        "10,-26.7105630185668,-24.74010832820331,-22.21344512706506,-20.111415587160508,-15.353778172910221,-14.738104448157818,-14.208072463325697,-13.195129349294568,-12.446781544744272,0.0,-6.871039154223465716825763,0.01928822349869130119267489,0.02087940479441163693956442,0.02335108276717670431566776,0.02590460634385651937691237,0.03445158906018257697135691,0.03599271185169087784255945,0.03743557464290414557230564,0.04054571880871011271521937,0.04320150342510452911040996,0.7189495848072715959633292",
+        "3,-12546.14088923008,-11.102469354731554,0.0,-4.059151009952878808916423,0.00003985457169536739695609956,0.04761510070307406919428955,0.9523450447252305634087544",
+        "5,-26.64372084575393,-20.54465875987706,-12.856855983224701,-11.300305587207543,0.0,-2.586388288237206487463965,0.01921161632182670351014271,0.02510581881086324043056167,0.0410119608094689782062962,0.04708667596688907587788386,0.8675839280909520019751156",
+        "4,-20.947581605959854,-12.616411960549227,-12.557474951915962,0.0,-1.584617935370296719483607,0.02458081018156896488369466,0.04175789658299350850070367,0.0419662338639432462422954,0.8916950593714942803733063",
+        "2,-10.122299019457403,0.0,0.1360822400652878552363367,0.05260893644088279281282723,0.9473910635591172071871728",
+        "8,-25.830265825599746,-25.252344968222882,-24.493121116820728,-23.95316821732278,-23.912926879064887,-17.53382612335324,-7.658821202619178,0.0,-5.644530589593659576441865,0.01989335410999698375949253,0.02036244145123871913236691,0.02101346699557484445059362,0.02150245564294117326671935,0.02153981388924513890302784,0.02973878568037187931470209,0.07330673885073440086385428,0.7926429433798968603092434",
+        "6,-26.474370024955732,-25.385922552849383,-17.67006773947655,-17.627418184306784,-15.158514617388013,0.0,-3.857589445157070648328012,0.01933445123958641537464182,0.02018520223364812838219155,0.02934763925328383071548483,0.02942155755073426404396647,0.03444853501160493327809727,0.8672626147111424282056181",
+    ];
+
+    #[test]
+    fn against_talbot_inversion_references() {
+        for row in TALBOT {
+            let f: Vec<f64> = row.split(',').map(|s| s.parse().unwrap()).collect();
+            let d = f[0] as usize;
+            let (z, lf, om) = (&f[1..=d], f[d + 1], &f[d + 2..]);
+            let e = evaluate_sorted(z, true, false).unwrap();
+            let ef = (e.log_f - lf).abs();
+            let ew = e
+                .grad
+                .iter()
+                .zip(om)
+                .map(|(a, b)| rel(*a, *b))
+                .fold(0.0, f64::max);
+            println!(
+                "d = {d}: |Δ log F| = {ef:.1e}, max rel Δω = {ew:.1e}, {} nodes",
+                e.nodes
+            );
+            assert!(ef < 1e-14 && ew < 1e-14, "d = {d}: {ef:e} {ew:e}");
+        }
+    }
+
+    #[test]
+    fn quadrature_converges_geometrically() {
+        // Successive levels of the nested trapezoidal rule for a hard case (a near-tie and a
+        // second cluster): the error must drop by orders of magnitude per halving.
+        let z = [-12546.14, -11.1, -5.0, -5.0 + 1e-9, 0.0];
+        let exact = evaluate_sorted(&z, true, false).unwrap();
+        let mut errs = Vec::new();
+        for level in 0..=4 {
+            let rule = Rule {
+                tol: 0.0,
+                max_level: level,
+                accept_at_max: true,
+            };
+            let e = evaluate_with(&z, true, false, rule).unwrap();
+            let err = e
+                .grad
+                .iter()
+                .zip(&exact.grad)
+                .map(|(a, b)| rel(*a, *b))
+                .fold((e.log_f - exact.log_f).abs(), f64::max);
+            errs.push(err);
+        }
+        println!("errors by level: {errs:?}");
+        let e = evaluate_sorted(&z, true, false).unwrap();
+        println!(
+            "production rule: {} nodes, changes {:?}",
+            e.nodes, e.changes
+        );
+        assert!(e.nodes <= 14 * (1 << MAX_LEVEL) + 1);
+        assert!(*e.changes.last().unwrap() <= TOL);
+        assert!(errs[0] > 1e-6 && errs[4] < 1e-14);
+        for w in errs.windows(2) {
+            assert!(w[1] < 0.1 * w[0] || w[1] < 1e-14);
+        }
+    }
+
+    /// A reference row: `(z, log F, ω, H)` (`H` row-major, empty if the file has none).
+    type Row = (Vec<f64>, f64, Vec<f64>, Vec<f64>);
+
+    fn read_reference(d: usize) -> Option<Vec<Row>> {
+        let path = format!(
+            "{}/tests/data/normalization_d{d}.csv",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        let text = std::fs::read_to_string(path).ok()?;
+        let mut lines = text
+            .lines()
+            .filter(|l| !l.trim().is_empty() && !l.starts_with('#'));
+        let header: Vec<String> = lines
+            .next()?
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .collect();
+        let col = |name: &str| header.iter().position(|h| h == name);
+        let zc: Vec<usize> = (1..=d)
+            .map(|i| col(&format!("z{i}")))
+            .collect::<Option<_>>()?;
+        let wc: Vec<usize> = (1..=d)
+            .map(|i| col(&format!("omega{i}")))
+            .collect::<Option<_>>()?;
+        let lc = col("logF")?;
+        let hc: Option<Vec<usize>> = (0..d * d)
+            .map(|k| col(&format!("H{}{}", k / d + 1, k % d + 1)))
+            .collect();
+        let mut rows = Vec::new();
+        for line in lines {
+            let f: Vec<f64> = line
+                .split(',')
+                .map(|s| s.trim().parse().unwrap_or(f64::NAN))
+                .collect();
+            rows.push((
+                zc.iter().map(|&c| f[c]).collect(),
+                f[lc],
+                wc.iter().map(|&c| f[c]).collect(),
+                hc.as_ref()
+                    .map(|h| h.iter().map(|&c| f[c]).collect())
+                    .unwrap_or_default(),
+            ));
+        }
+        Some(rows)
+    }
+
+    #[test]
+    fn against_high_precision_reference_files_if_present() {
+        for d in 2..=8 {
+            let Some(rows) = read_reference(d) else {
+                println!("tests/data/normalization_d{d}.csv not present: skipped");
+                continue;
+            };
+            let (mut ef, mut ew, mut eh) = (0.0f64, 0.0f64, 0.0f64);
+            for (z, lf, om, hr) in &rows {
+                let mut idx: Vec<usize> = (0..d).collect();
+                idx.sort_by(|&a, &b| z[a].total_cmp(&z[b]));
+                let zs: Vec<f64> = idx.iter().map(|&a| z[a]).collect();
+                let e = evaluate_sorted(&zs, true, !hr.is_empty()).unwrap();
+                ef = ef.max((e.log_f - lf).abs());
+                for (pos, &a) in idx.iter().enumerate() {
+                    ew = ew.max(rel(e.grad[pos], om[a]));
+                    for (qos, &b) in idx.iter().enumerate().filter(|_| !hr.is_empty()) {
+                        // Relative to the natural scale √(H_aa H_bb) ≥ |H_ab|.
+                        let scale = (hr[a * d + a] * hr[b * d + b]).sqrt();
+                        eh = eh.max((e.hess[pos * d + qos] - hr[a * d + b]).abs() / scale);
+                    }
+                }
+            }
+            println!(
+                "d = {d}: {} rows, max |Δ log F| = {ef:.1e}, max rel Δω = {ew:.1e}, \
+                 max |ΔH_ij|/√(H_ii H_jj) = {eh:.1e}",
+                rows.len()
+            );
+            assert!(ef < 1e-12 && ew < 1e-12, "d = {d}: {ef:e} {ew:e}");
+            assert!(eh < 1e-12, "d = {d}: Hessian {eh:e}");
+        }
+    }
 }
