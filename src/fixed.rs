@@ -411,23 +411,18 @@ fn jacobi_2x2(a00: f64, a01: f64, a11: f64, v: &mut [f64; 16], d: &mut [f64; 4])
 pub(crate) struct Derivs<const D: usize> {
     pub(crate) z: [f64; D],
     pub(crate) grad: [f64; D],
-    /// Row-major `D×D` in the first `D²` entries.
-    pub(crate) hess: [f64; 16],
+    pub(crate) hess: Mat<D>,
 }
 
 fn derivs<const D: usize>(z: &[f64; D]) -> Result<Derivs<D>> {
-    let mut d = Derivs {
-        z: *z,
-        grad: [0.0; D],
-        hess: [0.0; 16],
-    };
-    log_normalization_into(
-        z,
-        Method::Exact,
-        Some(&mut d.grad),
-        Some(&mut d.hess[..D * D]),
-    )?;
-    Ok(d)
+    let mut grad = [0.0; D];
+    let mut h = [0.0; 16];
+    log_normalization_into(z, Method::Exact, Some(&mut grad), Some(&mut h[..D * D]))?;
+    let mut hess = zeros::<D>();
+    for (i, row) in hess.iter_mut().enumerate() {
+        row.copy_from_slice(&h[i * D..(i + 1) * D]);
+    }
+    Ok(Derivs { z: *z, grad, hess })
 }
 
 /// Where the moment-matching Newton iteration starts.
@@ -443,6 +438,7 @@ pub(crate) enum Start<'a, const D: usize> {
 
 /// Solves `A x = b` (`a` k×k row-major SPD, destroyed; `b` overwritten by `x`) by Cholesky, as
 /// `mle::cholesky_solve`; `false` if `A` is not numerically positive definite.
+#[inline(always)]
 fn cholesky_solve(k: usize, a: &mut [f64], b: &mut [f64]) -> bool {
     for j in 0..k {
         let mut s = a[j * k + j];
@@ -535,7 +531,7 @@ pub(crate) fn solve_z<const D: usize>(
         let mut step = [0.0; D];
         for a in 0..k {
             for b in 0..k {
-                jac[a * k + b] = cur.hess[a * D + b];
+                jac[a * k + b] = cur.hess[a][b];
             }
             let g = cur.grad[a];
             step[a] = g * g * (1.0 / g - 1.0 / t[a]);
