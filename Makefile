@@ -52,6 +52,13 @@ demo: build
 	  esac; \
 	  echo "==== $$src"; "$$exe"; echo; \
 	done
+	@echo "==== plot of one run of examples/c/axis_tracking.c (truth, Bingham mode with 95 % interval, Kalman)"
+	@$(DEMO_DIR)/axis_tracking $(DEMO_DIR)/axis_tracking_run.csv > /dev/null
+	$(PYTHON) scripts/plot_run.py $(DEMO_DIR)/axis_tracking_run.csv $(DEMO_DIR)/axis_tracking_run.svg
+	@echo; echo "==== examples/python/track_quaternion.py (20 runs)"
+	@if $(PYTHON) -c 'import numpy' 2>/dev/null; then \
+	  BINGHAM_LIB=$(abspath $(RELEASE))/libbingham.so $(PYTHON) examples/python/track_quaternion.py 20; \
+	else echo "(skipped: NumPy is not installed; \`make deps\` installs it)"; fi
 
 # --- tests ---------------------------------------------------------------------------------
 
