@@ -203,11 +203,7 @@ pub(crate) fn solve_z_into(
                 z[i] = s[i] - top;
             }
         }
-        _ => {
-            for i in 0..k {
-                z[i] = (0.5 / t[d - 1] - 0.5 / t[i]).min(0.0);
-            }
-        }
+        _ => initial_guess(&t[..d], &mut z[..d]),
     }
     let resid = |g: &[f64]| -> f64 {
         (0..k)
@@ -292,6 +288,46 @@ pub(crate) fn solve_z_into(
         "MLE: no convergence in {MAX_ITER} Newton steps (relative residual {:e})",
         resid(&grad[..d])
     )))
+}
+
+/// Starting point of the MLE's Newton iteration: each `z_i` (`i < d`) from the d = 2 problem of
+/// the pair `(i, d)`, i.e. `ω_1([z_i, 0]) = ω̂_i / (ω̂_i + ω̂_d)`, solved by a few scalar Newton
+/// steps on the closed form. This is exact when the other coordinates are concentrated far more
+/// (or far less) than the pair, matches the Gaussian limit `z_i ≈ −1/(2ω̂_i)` for large
+/// concentrations and gives `z = 0` for uniform moments; Newton then needs one or two steps.
+pub(crate) fn initial_guess(t: &[f64], z: &mut [f64]) {
+    let d = t.len();
+    let last = t[d - 1];
+    for i in 0..d - 1 {
+        let r = t[i] / (t[i] + last);
+        z[i] = if r >= 0.5 { 0.0 } else { pair_inverse(r) };
+    }
+    z[d - 1] = 0.0;
+}
+
+/// Solves `ω_1([x, 0]) = r` for `x ≤ 0` (`0 < r < 1/2`) to ~1e-12 relative; the Gaussian start
+/// `1/(2(1−r)) − 1/(2r)` is already within a factor of two.
+fn pair_inverse(r: f64) -> f64 {
+    let mut x = (0.5 / (1.0 - r) - 0.5 / r).min(0.0);
+    let mut g = [0.0; 2];
+    let mut h = [0.0; 4];
+    for _ in 0..20 {
+        if log_normalization_into(&[x, 0.0], Method::Exact, Some(&mut g), Some(&mut h)).is_err() {
+            break;
+        }
+        let w = g[0];
+        if ((w - r) / r).abs() <= 1e-12 || !(h[0] > 0.0) {
+            break;
+        }
+        // Newton on 1/ω − 1/r (nearly linear in x): Δ = ω²(1/ω − 1/r)/H11
+        let step = w * w * (1.0 / w - 1.0 / r) / h[0];
+        let next = (x + step).min(0.0);
+        if !next.is_finite() {
+            break;
+        }
+        x = next;
+    }
+    x
 }
 
 /// Number of Newton steps the MLE takes for the target `ω̂` (diagnostics and benchmarks).
