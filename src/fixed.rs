@@ -22,7 +22,7 @@
 use crate::distribution::{ORTHOGONALITY_TOL, UNIT_TOL};
 use crate::error::{Error, Result};
 use crate::linalg::jacobi_in_place;
-use crate::mle::{MLE_TOL, OMEGA_MIN};
+use crate::mle::{initial_guess, MLE_TOL, OMEGA_MIN};
 use crate::normalization::{log_normalization_into, Method};
 
 /// A `D×D` matrix, row-major (`m[i][j]`: row `i`, column `j`).
@@ -277,7 +277,16 @@ pub(crate) fn params<const D: usize>(
             "`{m_name}` is not orthogonal: max |MᵀM − I| = {err:e} exceeds {ORTHOGONALITY_TOL:e}"
         )));
     }
-    Ok(normalize(&mm, &zz))
+    let (mm, zz) = normalize(&mm, &zz);
+    // The shift z − max z overflows when the entries span more than the largest double
+    // (e.g. z = (MAX, −MAX)): refuse instead of returning a −Inf concentration.
+    if let Some(i) = zz.iter().position(|v| !v.is_finite()) {
+        return Err(Error::InvalidArgument(format!(
+            "`{z_name}`: max z − min z overflows a double (sorted entry {i}); the \
+             concentrations must span less than about 1.8e308"
+        )));
+    }
+    Ok((mm, zz))
 }
 
 /// Checks that `x` has length D, is finite and has unit norm within `UNIT_TOL`; returns it
@@ -428,9 +437,9 @@ fn derivs<const D: usize>(z: &[f64; D]) -> Result<Derivs<D>> {
 /// Where the moment-matching Newton iteration starts.
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum Start<'a, const D: usize> {
-    /// The Gaussian approximation `z_i = 1/(2ω̂_d) − 1/(2ω̂_i)` (as `mle::solve_z_into` without
-    /// a start).
-    Gaussian,
+    /// The start `mle::solve_z_into` takes without a guess (`mle::initial_guess`: each `z_i`
+    /// from the d = 2 problem of the pair `(i, d)`).
+    Cold,
     /// A previous solution with its derivatives (as `solve_z_into` started there, minus the
     /// evaluation at the start, which is already known).
     Evaluated(&'a Derivs<D>),
@@ -500,11 +509,9 @@ pub(crate) fn solve_z<const D: usize>(
     }
     let mut cur = match start {
         Start::Evaluated(d) => *d,
-        Start::Gaussian => {
+        Start::Cold => {
             let mut z = [0.0; D];
-            for i in 0..k {
-                z[i] = (0.5 / t[D - 1] - 0.5 / t[i]).min(0.0);
-            }
+            initial_guess(&t, &mut z);
             derivs(&z)?
         }
     };
@@ -599,7 +606,7 @@ pub(crate) fn solve_z<const D: usize>(
 
 /// The Bingham distribution with second moment `s` (symmetric PSD, any positive scale), as
 /// `mle::mle_from_second_moment`, with an optional warm start (the previous solution with its
-/// derivatives; on failure from there the Gaussian start is tried). Returns normalized `(M, z)`
+/// derivatives; on failure from there the cold start is tried). Returns normalized `(M, z)`
 /// and the solution's derivatives (for the next warm start).
 pub(crate) fn mle<const D: usize>(
     s: &Mat<D>,
@@ -627,8 +634,8 @@ pub(crate) fn mle<const D: usize>(
         )));
     }
     let (sol, _) = match warm {
-        Some(d) => solve_z(&w, Start::Evaluated(d)).or_else(|_| solve_z(&w, Start::Gaussian)),
-        None => solve_z(&w, Start::Gaussian),
+        Some(d) => solve_z(&w, Start::Evaluated(d)).or_else(|_| solve_z(&w, Start::Cold)),
+        None => solve_z(&w, Start::Cold),
     }?;
     let (mm, zz) = normalize(&m, &sol.z);
     Ok((mm, zz, sol))
@@ -763,7 +770,7 @@ mod tests {
 
     fn solver_matches<const D: usize>(z0: [f64; D]) {
         let (_, w) = log_f_omega(&z0).unwrap();
-        let (sol, _) = solve_z(&w, Start::Gaussian).unwrap();
+        let (sol, _) = solve_z(&w, Start::Cold).unwrap();
         let mut reference = [0.0; D];
         crate::mle::solve_z_into(&w, None, &mut reference).unwrap();
         assert_eq!(sol.z, reference, "cold start, z0 = {z0:?}");

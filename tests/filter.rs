@@ -432,6 +432,10 @@ fn failed_calls_change_nothing() {
         let nonunit: Vec<f64> = sc.x0.iter().map(|v| v * (1.0 + 2e-6)).collect();
         let nan_x: Vec<f64> = sc.x0.iter().map(|_| f64::NAN).collect();
         let zero = vec![0.0; d];
+        // finite, but z − max z overflows
+        let mut span = vec![0.0; d];
+        span[0] = f64::MAX;
+        span[d - 1] = -f64::MAX;
         type Call<'a> = Box<dyn Fn(&mut BinghamFilter) -> bingham::Result<()> + 'a>;
         let calls: Vec<(&str, Call)> = vec![
             (
@@ -481,11 +485,21 @@ fn failed_calls_change_nothing() {
             ),
             ("set_state NaN", Box::new(|f| f.set_state(&nan_m, &sc.z0))),
             ("set_state short", Box::new(|f| f.set_state(&sc.m0, short))),
+            ("set_state z span", Box::new(|f| f.set_state(&sc.m0, &span))),
+            ("predict z span", Box::new(|f| f.predict(&sc.mw, &span))),
+            (
+                "update z span",
+                Box::new(|f| f.update(&sc.x0, &sc.mv, &span)),
+            ),
         ];
         for (what, call) in &calls {
             assert!(call(&mut f).is_err(), "{what} should fail");
             assert_eq!(bits(&f), before, "{what} changed the state");
         }
+        assert!(matches!(
+            BinghamFilter::new(d, &sc.m0, &span),
+            Err(Error::InvalidArgument(_))
+        ));
         assert!(f.log_likelihood(&nonunit, &sc.mv, &sc.zv).is_err());
         assert!(f.log_likelihood(&sc.x0, &bad_m, &sc.zv).is_err());
         let mut small = vec![0.0; d * d - 1];

@@ -24,7 +24,7 @@ pub const BINGHAM_FILTER_MAX_CONCENTRATION: f64 = 1e10;
 /// complex multiplication (d = 2, vectors `(re, im)`) or the Hamilton product (d = 4, quaternions
 /// `(w, x, y, z)`), and the noises `w`, `v` are Bingham distributed. The state is a Bingham
 /// distribution `(M, z)`: M is d x d row-major with orthonormal columns, the last column is the
-/// mode (the estimate; its negative is the same axis / rotation); z ascending with z[d-1] = 0.
+/// mode (the estimate; its negative is the same axis / rotation); z ascending with `z[d-1] = 0`.
 ///
 /// Thread safety: a handle may be used by one thread at a time (functions that take a
 /// `bingham_filter *` modify it; functions taking `const bingham_filter *` may run concurrently
@@ -176,7 +176,7 @@ pub unsafe extern "C" fn bingham_filter_set_state(
 ///
 /// - `m`: receives M, d x d row-major with orthonormal columns (the principal directions); the
 ///   last column is the mode.
-/// - `z`: receives the d concentrations, ascending, z[d-1] = 0 (column i of M belongs to z[i]).
+/// - `z`: receives the d concentrations, ascending, `z[d-1] = 0` (column i of M belongs to `z[i]`).
 ///
 /// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `m`, `z`); then nothing is written.
 ///
