@@ -607,3 +607,9 @@ fn scenarios_bingham_beats_kalman() {
         assert!(wins > runs / 2);
     }
 }
+
+#[test]
+fn filter_is_send_and_sync() {
+    fn check<T: Send + Sync + Clone + std::fmt::Debug>() {}
+    check::<BinghamFilter>();
+}
