@@ -92,7 +92,17 @@ impl Bingham {
                 "M is not orthogonal: max |MᵀM − I| = {err:e} exceeds {ORTHOGONALITY_TOL:e}"
             )));
         }
-        Ok(Self::from_parts_unchecked(m, z))
+        let b = Self::from_parts_unchecked(m, z);
+        // The shift z − max z overflows when the entries span more than the largest double
+        // (e.g. z = (MAX, −MAX)): refuse instead of returning a −Inf concentration.
+        if !b.z.iter().all(|v| v.is_finite()) {
+            return Err(Error::InvalidArgument(
+                "z: max z − min z overflows a double; the concentrations must span less than \
+                 about 1.8e308"
+                    .into(),
+            ));
+        }
+        Ok(b)
     }
 
     /// Like [`Bingham::new`] with `M` given row-major (`m.len() == d*d`) and `z.len() == d`.
@@ -349,7 +359,13 @@ pub(crate) fn sym_eigen_ascending(c: DMatrix<f64>) -> Result<(DMatrix<f64>, DVec
 /// The Bingham with precision matrix `C` (symmetric): eigenvectors and shifted eigenvalues.
 pub(crate) fn from_symmetric(c: DMatrix<f64>) -> Result<Bingham> {
     let (v, l) = sym_eigen_ascending(c)?;
-    Ok(Bingham::from_parts_unchecked(v, l))
+    let b = Bingham::from_parts_unchecked(v, l);
+    if !b.z.iter().all(|v| v.is_finite()) {
+        return Err(Error::Numerical(
+            "the resulting concentrations overflow a double".into(),
+        ));
+    }
+    Ok(b)
 }
 
 /// `Σ_ab A_ab L_a B L_bᵀ`: the second moment of `x ⊕ y` (d = 2 or 4).

@@ -23,7 +23,11 @@ pub(crate) struct Sampler<'a> {
 impl<'a> Sampler<'a> {
     pub(crate) fn new(dist: &'a Bingham) -> Self {
         let d = dist.dim();
-        let lambda: Vec<f64> = dist.z().iter().map(|z| (-z).max(0.0)).collect();
+        // λ is capped at 1e300: beyond about 9e307, 2λ/b overflows (b ≥ 1), the envelope's sd
+        // becomes 0 and (1 + 2λ/b)·c² = ∞·0 = NaN fails every acceptance test, so the loop never
+        // ended. The cap changes nothing visible: a spread of 1/√(2λ) ≤ 1e-150 around the mode
+        // rounds to the mode itself.
+        let lambda: Vec<f64> = dist.z().iter().map(|z| (-z).clamp(0.0, 1e300)).collect();
         // Solve h(b) = Σ 1/(b + 2λ_i) − 1 = 0 on (0, d]: h is decreasing; h(d) ≤ 0, h(0+) = +∞
         // (λ_d = 0). Bisection then Newton polish, in log b for robustness.
         let h = |b: f64| lambda.iter().map(|l| 1.0 / (b + 2.0 * l)).sum::<f64>() - 1.0;
