@@ -1,0 +1,2116 @@
+//! Property/fuzz tests of the C ABI: every exported function, called through its `extern "C"`
+//! signature with raw pointers, with arbitrary dimensions (0, 1, 2..64, 65, huge), NULL and
+//! misaligned pointers, NaN/±Inf, subnormals, huge and positive concentrations, non-orthogonal
+//! M, non-unit vectors, aliased outputs, and random sequences of filter calls.
+//!
+//! Every case checks:
+//! - the process survives (a crash handler prints the running case if it does not), and the
+//!   status is a known code other than `BINGHAM_ERR_PANIC`;
+//! - the status is the one the header prescribes where it is determined by the arguments
+//!   (invalid `d` → `INVALID_DIMENSION`, NULL/misaligned → `NULL_ARGUMENT`, NaN/Inf →
+//!   `INVALID_ARGUMENT`);
+//! - input arrays are never written (unless aliased to an output of a successful call) and no
+//!   byte around any array changes (guard words);
+//! - an error leaves every output buffer and the filter state bit-for-bit unchanged and replaces
+//!   this thread's last error message by one naming the function;
+//! - success writes every output completely, with finite values satisfying the invariants:
+//!   M orthonormal to 1e-12, z ascending with z[d−1] = 0, ω ≥ 0 summing to 1 within 1e-12,
+//!   probabilities ≥ 0, unit vectors unit.
+//!
+//! Deterministic (SplitMix64): each case has its own seed, printed on failure. Environment:
+//! - `BINGHAM_FUZZ_CASES` (default 120000): total number of cases over all functions;
+//! - `BINGHAM_FUZZ_SEED` (default 0): base seed (a different seed gives different cases);
+//! - `BINGHAM_FUZZ_REPRO=<label>:<seed>`: run that one case only, printing its inputs;
+//! - `BINGHAM_FUZZ_STATS=1`: print per-function status counts and timings.
+
+mod fuzz_common;
+
+use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
+
+use bingham::ffi::*;
+use bingham_status::*;
+use fuzz_common::*;
+
+// ---- argument kinds ---------------------------------------------------------------------------
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Kind {
+    /// d×d orthogonal matrix
+    M,
+    /// d concentrations
+    Z,
+    /// d×d second moment
+    S,
+    /// n×d unit vectors
+    X,
+    /// n weights
+    W,
+    /// d-vector, unit
+    U,
+    /// one double (output)
+    One,
+    /// d doubles (output)
+    D,
+    /// d×d doubles (output)
+    DD,
+    /// n doubles (output)
+    N,
+    /// n×d doubles (output)
+    ND,
+}
+
+fn kind_len(k: Kind, d: usize, n: usize) -> usize {
+    match k {
+        Kind::M | Kind::S | Kind::DD => d * d,
+        Kind::Z | Kind::U | Kind::D => d,
+        Kind::X | Kind::ND => n * d,
+        Kind::W | Kind::N => n,
+        Kind::One => 1,
+    }
+}
+
+/// The raw arguments of one call.
+struct Call {
+    d: usize,
+    n: usize,
+    seed: u64,
+    inp: [*const f64; 4],
+    out: [*mut f64; 3],
+}
+
+type CallFn = unsafe fn(&Call) -> bingham_status;
+type CheckFn = fn(&Case, &[Option<Vec<f64>>]) -> Result<(), String>;
+
+struct Spec {
+    name: &'static str,
+    call: CallFn,
+    /// composition and rotations: d = 2 and d = 4 only
+    only24: bool,
+    /// the function takes a count n
+    has_n: bool,
+    inputs: &'static [(Kind, &'static str, bool)],
+    outputs: &'static [(Kind, &'static str, bool)],
+    /// relative share of the cases
+    weight: f64,
+    /// probability of a d in 5..=64 (the rest: 2, 3, 4)
+    big_d: f64,
+    /// invariants of a successful call's outputs
+    check: CheckFn,
+}
+
+// Thin wrappers with one signature (SAFETY for all: the pointers come from `run_case`, which
+// allocates every array with the length the header prescribes for (d, n), or passes NULL,
+// misaligned or dangling pointers only where the function must refuse them before any access).
+unsafe fn c_nc(c: &Call) -> bingham_status {
+    bingham_normalization_constant(c.d, c.inp[0], c.out[0], c.out[1])
+}
+unsafe fn c_lnc(c: &Call) -> bingham_status {
+    bingham_log_normalization_constant(c.d, c.inp[0], c.out[0], c.out[1])
+}
+unsafe fn c_lnc_sp(c: &Call) -> bingham_status {
+    bingham_log_normalization_constant_saddlepoint(c.d, c.inp[0], c.out[0], c.out[1])
+}
+unsafe fn c_hess(c: &Call) -> bingham_status {
+    bingham_log_normalization_hessian(c.d, c.inp[0], c.out[0], c.out[1], c.out[2])
+}
+unsafe fn c_sm(c: &Call) -> bingham_status {
+    bingham_second_moment(c.d, c.inp[0], c.inp[1], c.out[0])
+}
+unsafe fn c_mle(c: &Call) -> bingham_status {
+    bingham_mle(c.d, c.inp[0], c.out[0], c.out[1])
+}
+unsafe fn c_mles(c: &Call) -> bingham_status {
+    bingham_mle_samples(c.d, c.n, c.inp[0], c.inp[1], c.out[0], c.out[1])
+}
+unsafe fn c_mul(c: &Call) -> bingham_status {
+    bingham_multiply(
+        c.d, c.inp[0], c.inp[1], c.inp[2], c.inp[3], c.out[0], c.out[1],
+    )
+}
+unsafe fn c_comp(c: &Call) -> bingham_status {
+    bingham_compose(
+        c.d, c.inp[0], c.inp[1], c.inp[2], c.inp[3], c.out[0], c.out[1],
+    )
+}
+unsafe fn c_pdf(c: &Call) -> bingham_status {
+    bingham_pdf(c.d, c.inp[0], c.inp[1], c.n, c.inp[2], c.out[0])
+}
+unsafe fn c_lpdf(c: &Call) -> bingham_status {
+    bingham_log_pdf(c.d, c.inp[0], c.inp[1], c.n, c.inp[2], c.out[0])
+}
+unsafe fn c_ent(c: &Call) -> bingham_status {
+    bingham_entropy(c.d, c.inp[0], c.inp[1], c.out[0])
+}
+unsafe fn c_kl(c: &Call) -> bingham_status {
+    bingham_kl_divergence(c.d, c.inp[0], c.inp[1], c.inp[2], c.inp[3], c.out[0])
+}
+unsafe fn c_samp(c: &Call) -> bingham_status {
+    bingham_sample(c.d, c.inp[0], c.inp[1], c.seed, c.n, c.out[0])
+}
+unsafe fn c_rotl(c: &Call) -> bingham_status {
+    bingham_rotate_left(c.d, c.inp[0], c.inp[1], c.inp[2], c.out[0], c.out[1])
+}
+unsafe fn c_rotr(c: &Call) -> bingham_status {
+    bingham_rotate_right(c.d, c.inp[0], c.inp[1], c.inp[2], c.out[0], c.out[1])
+}
+unsafe fn c_mode(c: &Call) -> bingham_status {
+    bingham_mode(c.d, c.inp[0], c.inp[1], c.out[0])
+}
+
+use Kind::*;
+
+const SPECS: &[Spec] = &[
+    Spec {
+        name: "bingham_normalization_constant",
+        call: c_nc,
+        only24: false,
+        has_n: false,
+        inputs: &[(Z, "z", false)],
+        outputs: &[(One, "f", false), (D, "df", true)],
+        weight: 8.0,
+        big_d: 0.15,
+        check: check_nc,
+    },
+    Spec {
+        name: "bingham_log_normalization_constant",
+        call: c_lnc,
+        only24: false,
+        has_n: false,
+        inputs: &[(Z, "z", false)],
+        outputs: &[(One, "log_f", false), (D, "dlog_f", true)],
+        weight: 12.0,
+        big_d: 0.15,
+        check: check_lnc,
+    },
+    Spec {
+        name: "bingham_log_normalization_constant_saddlepoint",
+        call: c_lnc_sp,
+        only24: false,
+        has_n: false,
+        inputs: &[(Z, "z", false)],
+        outputs: &[(One, "log_f", false), (D, "dlog_f", true)],
+        weight: 6.0,
+        big_d: 0.3,
+        check: check_lnc_sp,
+    },
+    Spec {
+        name: "bingham_log_normalization_hessian",
+        call: c_hess,
+        only24: false,
+        has_n: false,
+        inputs: &[(Z, "z", false)],
+        outputs: &[
+            (One, "log_f", false),
+            (D, "dlog_f", true),
+            (DD, "d2log_f", false),
+        ],
+        weight: 6.0,
+        big_d: 0.05,
+        check: check_hess,
+    },
+    Spec {
+        name: "bingham_second_moment",
+        call: c_sm,
+        only24: false,
+        has_n: false,
+        inputs: &[(M, "m", false), (Z, "z", false)],
+        outputs: &[(DD, "s", false)],
+        weight: 8.0,
+        big_d: 0.1,
+        check: check_sm,
+    },
+    Spec {
+        name: "bingham_mle",
+        call: c_mle,
+        only24: false,
+        has_n: false,
+        inputs: &[(S, "s", false)],
+        outputs: &[(DD, "m", false), (D, "z", false)],
+        weight: 8.0,
+        big_d: 0.02,
+        check: check_mle,
+    },
+    Spec {
+        name: "bingham_mle_samples",
+        call: c_mles,
+        only24: false,
+        has_n: true,
+        inputs: &[(X, "x", false), (W, "w", true)],
+        outputs: &[(DD, "m", false), (D, "z", false)],
+        weight: 5.0,
+        big_d: 0.02,
+        check: check_dist_out,
+    },
+    Spec {
+        name: "bingham_multiply",
+        call: c_mul,
+        only24: false,
+        has_n: false,
+        inputs: &[
+            (M, "m1", false),
+            (Z, "z1", false),
+            (M, "m2", false),
+            (Z, "z2", false),
+        ],
+        outputs: &[(DD, "m", false), (D, "z", false)],
+        weight: 8.0,
+        big_d: 0.1,
+        check: check_dist_out,
+    },
+    Spec {
+        name: "bingham_compose",
+        call: c_comp,
+        only24: true,
+        has_n: false,
+        inputs: &[
+            (M, "m1", false),
+            (Z, "z1", false),
+            (M, "m2", false),
+            (Z, "z2", false),
+        ],
+        outputs: &[(DD, "m", false), (D, "z", false)],
+        weight: 10.0,
+        big_d: 0.05,
+        check: check_dist_out,
+    },
+    Spec {
+        name: "bingham_pdf",
+        call: c_pdf,
+        only24: false,
+        has_n: true,
+        inputs: &[(M, "m", false), (Z, "z", false), (X, "x", false)],
+        outputs: &[(N, "p", false)],
+        weight: 6.0,
+        big_d: 0.1,
+        check: check_pdf,
+    },
+    Spec {
+        name: "bingham_log_pdf",
+        call: c_lpdf,
+        only24: false,
+        has_n: true,
+        inputs: &[(M, "m", false), (Z, "z", false), (X, "x", false)],
+        outputs: &[(N, "log_p", false)],
+        weight: 6.0,
+        big_d: 0.1,
+        check: check_log_pdf,
+    },
+    Spec {
+        name: "bingham_entropy",
+        call: c_ent,
+        only24: false,
+        has_n: false,
+        inputs: &[(M, "m", false), (Z, "z", false)],
+        outputs: &[(One, "h", false)],
+        weight: 6.0,
+        big_d: 0.1,
+        check: check_finite_out,
+    },
+    Spec {
+        name: "bingham_kl_divergence",
+        call: c_kl,
+        only24: false,
+        has_n: false,
+        inputs: &[
+            (M, "m1", false),
+            (Z, "z1", false),
+            (M, "m2", false),
+            (Z, "z2", false),
+        ],
+        outputs: &[(One, "kl", false)],
+        weight: 6.0,
+        big_d: 0.1,
+        check: check_kl,
+    },
+    Spec {
+        name: "bingham_sample",
+        call: c_samp,
+        only24: false,
+        has_n: true,
+        inputs: &[(M, "m", false), (Z, "z", false)],
+        outputs: &[(ND, "x_out", false)],
+        weight: 5.0,
+        big_d: 0.05,
+        check: check_sample,
+    },
+    Spec {
+        name: "bingham_rotate_left",
+        call: c_rotl,
+        only24: true,
+        has_n: false,
+        inputs: &[(M, "m", false), (Z, "z", false), (U, "u", false)],
+        outputs: &[(DD, "m_out", false), (D, "z_out", false)],
+        weight: 6.0,
+        big_d: 0.05,
+        check: check_dist_out,
+    },
+    Spec {
+        name: "bingham_rotate_right",
+        call: c_rotr,
+        only24: true,
+        has_n: false,
+        inputs: &[(M, "m", false), (Z, "z", false), (U, "u", false)],
+        outputs: &[(DD, "m_out", false), (D, "z_out", false)],
+        weight: 6.0,
+        big_d: 0.05,
+        check: check_dist_out,
+    },
+    Spec {
+        name: "bingham_mode",
+        call: c_mode,
+        only24: false,
+        has_n: false,
+        inputs: &[(M, "m", false), (Z, "z", false)],
+        outputs: &[(D, "mode", false)],
+        weight: 8.0,
+        big_d: 0.2,
+        check: check_mode,
+    },
+];
+
+// ---- one case ---------------------------------------------------------------------------------
+
+/// What was done to the arguments of a case (for the expected status and the report).
+#[derive(Clone, Debug, PartialEq)]
+enum Attack {
+    None,
+    /// d outside 2..64 (or n*d overflowing): arrays are dangling or tiny and must not be touched
+    BadDim,
+    /// a required pointer is NULL
+    Null(String),
+    /// a pointer is not aligned for double
+    Misaligned(String),
+    /// a NaN/Inf entry in an input
+    NonFinite(String),
+    /// a finite but unacceptable or extreme input (non-orthogonal M, non-unit x, bad S, …)
+    Bad(String),
+    /// an output aliases an input (valid in-place use)
+    Alias(usize, usize),
+}
+
+#[derive(Debug)]
+struct Case {
+    spec: usize,
+    seed: u64,
+    d: usize,
+    n: usize,
+    /// the input arrays (None: NULL)
+    inputs: Vec<Option<Vec<f64>>>,
+    /// which outputs are requested (false: NULL, only for optional ones or attacks)
+    out_present: Vec<bool>,
+    attack: Attack,
+    /// pointer tweaks: (is_input, index, byte offset) for misalignment
+    misalign: Option<(bool, usize, usize)>,
+    /// arrays replaced by a dangling pointer (invalid d)
+    dangling: bool,
+    /// "moderate" inputs: z within the documented exact range, M exactly orthogonal
+    moderate: bool,
+}
+
+fn pick_d(rng: &mut Rng, spec: &Spec) -> usize {
+    if rng.chance(spec.big_d) {
+        // 5..=64, biased to the small end, the extremes included
+        match rng.below(6) {
+            0 => 64,
+            1 => 5,
+            2 => 5 + rng.below(60),
+            _ => 5 + rng.below(8),
+        }
+    } else {
+        2 + rng.below(3)
+    }
+}
+
+fn gen_input(rng: &mut Rng, k: Kind, d: usize, n: usize, moderate: bool) -> Vec<f64> {
+    match k {
+        M => orthogonal(rng, d),
+        Z => {
+            if moderate {
+                z_moderate(rng, d)
+            } else {
+                z_vector(rng, d)
+            }
+        }
+        S => {
+            let m = orthogonal(rng, d);
+            let w: Vec<f64> = match rng.below(6) {
+                0 => vec![1.0; d],
+                1 => (0..d).map(|_| rng.log_uniform(-12.0, 0.0)).collect(),
+                2 => (0..d).map(|_| rng.log_uniform(-3.0, 0.0)).collect(),
+                _ => (0..d).map(|_| rng.range(0.05, 1.0)).collect(),
+            };
+            let scale = if moderate {
+                1.0
+            } else {
+                rng.log_uniform(-3.0, 3.0)
+            };
+            let w: Vec<f64> = w.iter().map(|v| v * scale).collect();
+            congruence(&m, &w, d)
+        }
+        X => {
+            let center = unit_vector(rng, d);
+            let spread = rng.log_uniform(-6.0, 1.0);
+            (0..n)
+                .flat_map(|_| {
+                    let v: Vec<f64> = center.iter().map(|c| c + spread * rng.normal()).collect();
+                    let nv = norm(&v);
+                    let sign = if rng.chance(0.5) { 1.0 } else { -1.0 };
+                    v.into_iter()
+                        .map(move |x| sign * x / nv)
+                        .collect::<Vec<_>>()
+                })
+                .collect()
+        }
+        W => (0..n)
+            .map(|_| match rng.below(8) {
+                0 => 0.0,
+                1 => rng.log_uniform(-10.0, 10.0),
+                _ => rng.range(0.01, 1.0),
+            })
+            .collect(),
+        U => unit_vector(rng, d),
+        One | D | DD | N | ND => unreachable!("not an input kind"),
+    }
+}
+
+/// Makes an input finite but unacceptable or extreme; returns a description.
+fn spoil(rng: &mut Rng, k: Kind, a: &mut [f64], d: usize) -> String {
+    if a.is_empty() {
+        return "empty".into();
+    }
+    match k {
+        M => match rng.below(6) {
+            0 => {
+                let eps = rng.log_uniform(-9.0, 0.0);
+                let i = rng.below(a.len());
+                a[i] += eps;
+                format!("M[{i}] += {eps:e}")
+            }
+            1 => {
+                a.iter_mut().for_each(|v| *v = 0.0);
+                "M = 0".into()
+            }
+            2 => {
+                let s = rng.log_uniform(-3.0, 3.0);
+                a.iter_mut().for_each(|v| *v *= s);
+                format!("M *= {s:e}")
+            }
+            3 => {
+                for r in 0..d {
+                    a[r * d + d - 1] = a[r * d];
+                }
+                "M: last column = first".into()
+            }
+            4 => {
+                let i = rng.below(a.len());
+                let v = extreme(rng);
+                a[i] = v;
+                format!("M[{i}] = {v:e}")
+            }
+            _ => {
+                let eps = rng.log_uniform(-8.0, -5.0);
+                a.iter_mut().for_each(|v| *v *= 1.0 + eps);
+                format!("M *= 1 + {eps:e}")
+            }
+        },
+        Z => {
+            let i = rng.below(a.len());
+            let v = extreme(rng);
+            a[i] = v;
+            if rng.chance(0.3) {
+                let j = rng.below(a.len());
+                a[j] = -v;
+                format!("z[{i}] = {v:e}, z[{j}] = {:e}", -v)
+            } else {
+                format!("z[{i}] = {v:e}")
+            }
+        }
+        S => match rng.below(6) {
+            0 => {
+                let (r, c) = (rng.below(d), rng.below(d));
+                let v = rng.log_uniform(-12.0, 0.0);
+                a[r * d + c] += v;
+                format!("S[{r},{c}] += {v:e} (asymmetric)")
+            }
+            1 => {
+                a.iter_mut().for_each(|v| *v = 0.0);
+                "S = 0".into()
+            }
+            2 => {
+                // negative or zero eigenvalue: S − λ u uᵀ with λ ≥ the smallest eigenvalue is
+                // hard to arrange exactly; subtract a large multiple of the identity instead
+                let t: f64 = (0..d).map(|i| a[i * d + i]).sum();
+                let c = t * rng.range(0.0, 2.0) / d as f64;
+                for i in 0..d {
+                    a[i * d + i] -= c;
+                }
+                format!("S −= {c:e}·I")
+            }
+            3 => {
+                let s = extreme(rng).abs();
+                a.iter_mut().for_each(|v| *v *= s);
+                format!("S *= {s:e}")
+            }
+            4 => {
+                // rank deficient: u uᵀ
+                let u = unit_vector(rng, d);
+                for r in 0..d {
+                    for c in 0..d {
+                        a[r * d + c] = u[r] * u[c];
+                    }
+                }
+                "S = u uᵀ".into()
+            }
+            _ => {
+                let i = rng.below(a.len());
+                let v = extreme(rng);
+                a[i] = v;
+                format!("S[{i}] = {v:e}")
+            }
+        },
+        X | U => {
+            let rows = a.len() / d;
+            let r = rng.below(rows);
+            let row = &mut a[r * d..(r + 1) * d];
+            match rng.below(4) {
+                0 => {
+                    let eps = rng.log_uniform(-9.0, 0.0) * if rng.chance(0.5) { 1.0 } else { -0.5 };
+                    row.iter_mut().for_each(|v| *v *= 1.0 + eps);
+                    format!("row {r} *= 1 + {eps:e}")
+                }
+                1 => {
+                    row.iter_mut().for_each(|v| *v = 0.0);
+                    format!("row {r} = 0")
+                }
+                2 => {
+                    let i = rng.below(d);
+                    let v = extreme(rng);
+                    row[i] = v;
+                    format!("row {r}[{i}] = {v:e}")
+                }
+                _ => {
+                    let s = extreme(rng);
+                    row.iter_mut().for_each(|v| *v *= s);
+                    format!("row {r} *= {s:e}")
+                }
+            }
+        }
+        W => match rng.below(4) {
+            0 => {
+                let i = rng.below(a.len());
+                a[i] = -rng.log_uniform(-300.0, 3.0);
+                format!("w[{i}] = {:e}", a[i])
+            }
+            1 => {
+                a.iter_mut().for_each(|v| *v = 0.0);
+                "w = 0".into()
+            }
+            2 => {
+                a.iter_mut().for_each(|v| *v = f64::MAX);
+                "w = MAX".into()
+            }
+            _ => {
+                let i = rng.below(a.len());
+                let v = extreme(rng);
+                a[i] = v;
+                format!("w[{i}] = {v:e}")
+            }
+        },
+        _ => unreachable!(),
+    }
+}
+
+fn gen_case(spec_idx: usize, seed: u64) -> Case {
+    let spec = &SPECS[spec_idx];
+    let mut rng = Rng::new(seed);
+    let roll = rng.unit();
+    let mut attack = Attack::None;
+    let mut d = pick_d(&mut rng, spec);
+    if spec.only24 && rng.chance(0.97) {
+        d = if rng.chance(0.5) { 2 } else { 4 };
+    }
+    let mut n = if spec.has_n {
+        match rng.below(10) {
+            0 => 0,
+            1 => 1,
+            _ => 1 + rng.below(d + 6),
+        }
+    } else {
+        0
+    };
+    if spec.name == "bingham_mle_samples" && n == 0 && rng.chance(0.7) {
+        n = 1 + rng.below(2 * d + 2);
+    }
+    let moderate = rng.chance(0.5);
+    let mut dangling = false;
+    if roll < 0.05 {
+        attack = Attack::BadDim;
+        if spec.has_n && rng.chance(0.3) {
+            // n*d overflows (or exceeds isize::MAX bytes): refused before any access
+            n = match rng.below(3) {
+                0 => usize::MAX,
+                1 => usize::MAX / d + 1,
+                _ => (isize::MAX as usize) / 8 / d + 1,
+            };
+            dangling = true;
+        } else {
+            d = *rng.pick(&[0, 1, 65, 66, 100, 1 << 20, usize::MAX / 2, usize::MAX]);
+            dangling = d > 65 || rng.chance(0.5);
+            if !dangling {
+                n = n.min(3);
+            }
+        }
+    }
+    // inputs with valid content (tiny dummies when d is absurd)
+    let len_d = if d > 65 { 1 } else { d };
+    let mut inputs: Vec<Option<Vec<f64>>> = spec
+        .inputs
+        .iter()
+        .map(|&(k, _, optional)| {
+            if optional && rng.chance(0.3) {
+                None
+            } else if dangling || d < 2 || d > 64 {
+                Some(vec![0.5; kind_len(k, len_d, n.min(8))])
+            } else {
+                Some(gen_input(&mut rng, k, d, n, moderate))
+            }
+        })
+        .collect();
+    let mut out_present: Vec<bool> = spec
+        .outputs
+        .iter()
+        .map(|&(_, _, optional)| !(optional && rng.chance(0.3)))
+        .collect();
+    let mut misalign = None;
+    if attack == Attack::None {
+        let r = rng.unit();
+        let n_in = spec.inputs.len();
+        let n_out = spec.outputs.len();
+        if r < 0.06 {
+            // NULL: a required input or output (array arguments with n = 0 may be NULL)
+            let total = n_in + n_out;
+            let k = rng.below(total);
+            if k < n_in {
+                inputs[k] = None;
+                attack = Attack::Null(spec.inputs[k].1.into());
+            } else {
+                out_present[k - n_in] = false;
+                attack = Attack::Null(spec.outputs[k - n_in].1.into());
+            }
+        } else if r < 0.10 {
+            let total = n_in + n_out;
+            let k = rng.below(total);
+            let off = 1 + rng.below(7);
+            if k < n_in {
+                if inputs[k].is_none() {
+                    inputs[k] = Some(vec![0.5; kind_len(spec.inputs[k].0, d, n)]);
+                }
+                misalign = Some((true, k, off));
+                attack = Attack::Misaligned(spec.inputs[k].1.into());
+            } else {
+                out_present[k - n_in] = true;
+                misalign = Some((false, k - n_in, off));
+                attack = Attack::Misaligned(spec.outputs[k - n_in].1.into());
+            }
+        } else if r < 0.22 {
+            let present: Vec<usize> = (0..n_in)
+                .filter(|&i| inputs[i].as_ref().is_some_and(|v| !v.is_empty()))
+                .collect();
+            if !present.is_empty() {
+                let k = *rng.pick(&present);
+                let a = inputs[k].as_mut().unwrap();
+                let i = rng.below(a.len());
+                a[i] = non_finite(&mut rng);
+                attack = Attack::NonFinite(format!("{}[{i}] = {}", spec.inputs[k].1, a[i]));
+            }
+        } else if r < 0.40 {
+            let present: Vec<usize> = (0..n_in)
+                .filter(|&i| inputs[i].as_ref().is_some_and(|v| !v.is_empty()))
+                .collect();
+            if !present.is_empty() {
+                let k = *rng.pick(&present);
+                let kind = spec.inputs[k].0;
+                let what = spoil(&mut rng, kind, inputs[k].as_mut().unwrap(), d);
+                attack = Attack::Bad(format!("{}: {what}", spec.inputs[k].1));
+            }
+        } else if r < 0.47 {
+            // an output aliasing an input of the same length
+            let pairs: Vec<(usize, usize)> = (0..n_out)
+                .flat_map(|o| (0..n_in).map(move |i| (o, i)))
+                .filter(|&(o, i)| {
+                    let (ko, ki) = (spec.outputs[o].0, spec.inputs[i].0);
+                    inputs[i].is_some()
+                        && (ko == DD && (ki == M || ki == S) || ko == D && (ki == Z || ki == U))
+                })
+                .collect();
+            if !pairs.is_empty() {
+                let (o, i) = *rng.pick(&pairs);
+                out_present[o] = true;
+                attack = Attack::Alias(o, i);
+            }
+        }
+    }
+    Case {
+        spec: spec_idx,
+        seed,
+        d,
+        n,
+        inputs,
+        out_present,
+        attack,
+        misalign,
+        dangling,
+        moderate,
+    }
+}
+
+/// The status the header prescribes for this case, if determined by the arguments alone.
+fn expected(case: &Case) -> Option<bingham_status> {
+    let spec = &SPECS[case.spec];
+    match &case.attack {
+        Attack::BadDim => return Some(BINGHAM_ERR_INVALID_DIMENSION),
+        Attack::Null(_) | Attack::Misaligned(_) => {
+            if spec.name == "bingham_mle_samples" && case.n == 0 {
+                return Some(BINGHAM_ERR_INVALID_ARGUMENT);
+            }
+            // arrays of length 0 (n = 0) may be NULL/anything
+            let null_matters = match &case.attack {
+                Attack::Null(name) | Attack::Misaligned(name) => {
+                    let k = spec
+                        .inputs
+                        .iter()
+                        .map(|a| (a.0, a.1))
+                        .chain(spec.outputs.iter().map(|a| (a.0, a.1)))
+                        .find(|a| a.1 == name)
+                        .unwrap()
+                        .0;
+                    let optional = spec
+                        .inputs
+                        .iter()
+                        .chain(spec.outputs.iter())
+                        .any(|a| a.1 == name && a.2);
+                    let is_null = matches!(case.attack, Attack::Null(_));
+                    !(is_null && optional) && (kind_len(k, case.d, case.n) > 0 || !spec.has_n)
+                }
+                _ => unreachable!(),
+            };
+            if null_matters {
+                return Some(BINGHAM_ERR_NULL_ARGUMENT);
+            }
+            return None;
+        }
+        _ => {}
+    }
+    if spec.name == "bingham_mle_samples" && case.n == 0 {
+        return Some(BINGHAM_ERR_INVALID_ARGUMENT);
+    }
+    if let Attack::NonFinite(_) = case.attack {
+        return Some(BINGHAM_ERR_INVALID_ARGUMENT);
+    }
+    if spec.only24 && case.d != 2 && case.d != 4 {
+        return match case.attack {
+            Attack::Bad(_) => None, // INVALID_ARGUMENT or INVALID_DIMENSION, checked below
+            _ => Some(BINGHAM_ERR_INVALID_DIMENSION),
+        };
+    }
+    None
+}
+
+/// Where the header promises success: exactly orthogonal M, z within the documented range, and
+/// no spoiled input.
+fn must_succeed(case: &Case) -> bool {
+    let spec = &SPECS[case.spec];
+    if !matches!(case.attack, Attack::None | Attack::Alias(..)) || !case.moderate {
+        return false;
+    }
+    if spec.only24 && case.d != 2 && case.d != 4 {
+        return false;
+    }
+    match spec.name {
+        "bingham_normalization_constant" => false, // may over/underflow by design
+        "bingham_mle_samples" => false,            // samples may be degenerate (singular scatter)
+        "bingham_pdf" => false,                    // may overflow to +Inf by design (documented)
+        _ => true,
+    }
+}
+
+#[derive(Default, Clone)]
+struct Stats {
+    cases: u64,
+    by_status: BTreeMap<&'static str, u64>,
+    time: Duration,
+}
+
+/// Runs one case; Err describes the failure.
+fn run_case(case: &Case, verbose: bool) -> Result<bingham_status, String> {
+    let spec = &SPECS[case.spec];
+    let (d, n) = (case.d, case.n);
+    let mut in_bufs: Vec<Option<Buf>> = case
+        .inputs
+        .iter()
+        .map(|a| a.as_ref().map(|v| Buf::from(v)))
+        .collect();
+    let out_len = |k: Kind| {
+        if case.dangling || !(2..=64).contains(&d) {
+            1
+        } else {
+            kind_len(k, d, n)
+        }
+    };
+    let mut out_bufs: Vec<Option<Buf>> = spec
+        .outputs
+        .iter()
+        .zip(&case.out_present)
+        .map(|(&(k, _, _), &p)| p.then(|| Buf::sentinel(out_len(k))))
+        .collect();
+    let mut call = Call {
+        d,
+        n,
+        seed: case.seed,
+        inp: [std::ptr::null(); 4],
+        out: [std::ptr::null_mut(); 3],
+    };
+    for (i, b) in in_bufs.iter_mut().enumerate() {
+        if let Some(b) = b {
+            call.inp[i] = if case.dangling { dangling() } else { b.ptr() };
+        }
+    }
+    for (i, b) in out_bufs.iter_mut().enumerate() {
+        if let Some(b) = b {
+            call.out[i] = if case.dangling { dangling() } else { b.ptr() };
+        }
+    }
+    if let Some((is_in, k, off)) = case.misalign {
+        if is_in {
+            call.inp[k] = in_bufs[k].as_mut().unwrap().misaligned(off);
+        } else {
+            call.out[k] = out_bufs[k].as_mut().unwrap().misaligned(off);
+        }
+    }
+    let mut alias = None;
+    if let Attack::Alias(o, i) = case.attack {
+        call.out[o] = in_bufs[i].as_mut().unwrap().ptr();
+        alias = Some((o, i));
+    }
+    if verbose {
+        eprintln!("{case:#?}");
+    }
+    let in_before: Vec<Option<Vec<u64>>> =
+        in_bufs.iter().map(|b| b.as_ref().map(Buf::bits)).collect();
+    let primed = prime_last_error(spec.name);
+
+    // SAFETY: see the wrappers: every pointer is NULL, misaligned (refused), dangling (d or n
+    // refused first), or a buffer of the length the header prescribes.
+    let status = unsafe { (spec.call)(&call) };
+
+    let code = status_code(status);
+    if !(0..=6).contains(&code) {
+        return Err(format!("unknown status code {code}"));
+    }
+    if status == BINGHAM_ERR_PANIC {
+        return Err(format!("panic caught: {}", last_error()));
+    }
+    if let Some(want) = expected(case) {
+        if status != want {
+            let msg = if status != BINGHAM_OK {
+                last_error()
+            } else {
+                String::new()
+            };
+            return Err(format!(
+                "status {} where the header prescribes {} ({msg})",
+                status_name(status),
+                status_name(want)
+            ));
+        }
+    }
+    if spec.only24 && d != 2 && d != 4 && (2..=64).contains(&d) && status == BINGHAM_OK {
+        return Err("OK for a dimension other than 2 and 4".into());
+    }
+    if status != BINGHAM_OK && must_succeed(case) {
+        return Err(format!(
+            "status {} for inputs where success is documented: {}",
+            status_name(status),
+            last_error()
+        ));
+    }
+    // inputs: unchanged (except an alias after success), guards intact
+    for (i, b) in in_bufs.iter().enumerate() {
+        let Some(b) = b else { continue };
+        if !b.guards_ok() {
+            return Err(format!(
+                "guard words around input `{}` changed",
+                spec.inputs[i].1
+            ));
+        }
+        let aliased_ok = alias.is_some_and(|(_, ai)| ai == i) && status == BINGHAM_OK;
+        if !aliased_ok && Some(b.bits()) != in_before[i] {
+            return Err(format!("input `{}` was modified", spec.inputs[i].1));
+        }
+    }
+    for (o, b) in out_bufs.iter().enumerate() {
+        let Some(b) = b else { continue };
+        let name = spec.outputs[o].1;
+        let misaligned_here = case.misalign.is_some_and(|(is_in, k, _)| !is_in && k == o);
+        if status != BINGHAM_OK || case.dangling || misaligned_here {
+            if !b.untouched() {
+                return Err(format!(
+                    "output `{name}` written although the status is {}",
+                    status_name(status)
+                ));
+            }
+        } else if alias.is_some_and(|(ao, _)| ao == o) {
+            if !b.untouched() {
+                return Err(format!("output `{name}` written although it was aliased"));
+            }
+        } else {
+            if !b.guards_ok() {
+                return Err(format!("guard words around output `{name}` overwritten"));
+            }
+            if !b.fully_written() {
+                return Err(format!("output `{name}` not completely written"));
+            }
+        }
+    }
+    if status != BINGHAM_OK {
+        if let Err(e) = check_error_message(spec.name) {
+            return Err(format!("{e} (primed with {primed:?})"));
+        }
+        return Ok(status);
+    }
+    // success: collect outputs (from the aliased input where aliased) and check invariants
+    let outs: Vec<Option<Vec<f64>>> = (0..spec.outputs.len())
+        .map(|o| match alias {
+            Some((ao, ai)) if ao == o => in_bufs[ai].as_ref().map(Buf::values),
+            _ => out_bufs[o].as_ref().map(Buf::values),
+        })
+        .collect();
+    for (o, v) in outs.iter().enumerate() {
+        if let Some(v) = v {
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                if !(spec.name == "bingham_pdf" && v[i] == f64::INFINITY) {
+                    return Err(format!(
+                        "output `{}`[{i}] = {} is not finite",
+                        spec.outputs[o].1, v[i]
+                    ));
+                }
+            }
+        }
+    }
+    (spec.check)(case, &outs)?;
+    Ok(status)
+}
+
+// ---- invariants per function ------------------------------------------------------------------
+
+fn check_nc(_c: &Case, o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    let f = o[0].as_ref().unwrap()[0];
+    if f.is_nan() || f <= 0.0 || !f.is_normal() {
+        return Err(format!("F = {f:e} is not a positive normal number"));
+    }
+    if let Some(df) = &o[1] {
+        let w: Vec<f64> = df.iter().map(|v| v / f).collect();
+        check_omega(&w).map_err(|e| format!("df/F: {e}"))?;
+    }
+    Ok(())
+}
+
+fn check_lnc(_c: &Case, o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    if let Some(w) = &o[1] {
+        check_omega(w).map_err(|e| format!("dlog_f: {e}"))?;
+    }
+    Ok(())
+}
+
+fn check_lnc_sp(_c: &Case, o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    if let Some(w) = &o[1] {
+        if let Some(i) = w.iter().position(|v| *v < 0.0) {
+            return Err(format!("saddlepoint dlog_f[{i}] = {} < 0", w[i]));
+        }
+    }
+    Ok(())
+}
+
+fn check_hess(c: &Case, o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    let d = c.d;
+    if let Some(w) = &o[1] {
+        check_omega(w).map_err(|e| format!("dlog_f: {e}"))?;
+    }
+    let h = o[2].as_ref().unwrap();
+    for i in 0..d {
+        // variances of x_i² ≥ 0; the diagonal bounds the row (Cauchy–Schwarz)
+        let hii = h[i * d + i];
+        if hii < -1e-15 {
+            return Err(format!("Hessian diagonal [{i}] = {hii:e} < 0"));
+        }
+        let scale = (0..d).map(|j| h[i * d + j].abs()).fold(0.0, f64::max);
+        let row: f64 = (0..d).map(|j| h[i * d + j]).sum();
+        if row.abs() > 1e-10 * scale + 1e-14 {
+            return Err(format!("Hessian row {i} sums to {row:e} (scale {scale:e})"));
+        }
+        for j in 0..i {
+            let (a, b) = (h[i * d + j], h[j * d + i]);
+            if (a - b).abs() > 1e-12 * a.abs().max(b.abs()) {
+                return Err(format!(
+                    "Hessian not symmetric at ({i},{j}): {a:e} vs {b:e}"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check_sm(c: &Case, o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    let d = c.d;
+    let s = o[0].as_ref().unwrap();
+    let tr: f64 = (0..d).map(|i| s[i * d + i]).sum();
+    if (tr - 1.0).abs() > STATE_TOL {
+        return Err(format!("trace S = 1 + {:e}", tr - 1.0));
+    }
+    for i in 0..d {
+        if s[i * d + i] < 0.0 {
+            return Err(format!("S[{i},{i}] = {:e} < 0", s[i * d + i]));
+        }
+        for j in 0..i {
+            if (s[i * d + j] - s[j * d + i]).abs() > 1e-15 {
+                return Err(format!("S not symmetric at ({i},{j})"));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check_dist_out(c: &Case, o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    check_state(o[0].as_ref().unwrap(), o[1].as_ref().unwrap(), c.d)
+}
+
+fn check_mle(c: &Case, o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    check_dist_out(c, o)?;
+    if c.moderate && c.attack == Attack::None && c.d <= 4 {
+        // round trip: the fit's second moment equals the normalized input
+        let d = c.d;
+        let (m, z) = (o[0].as_ref().unwrap(), o[1].as_ref().unwrap());
+        let mut lf = 0.0;
+        let mut w = vec![0.0; d];
+        // SAFETY: valid buffers of length d.
+        let st =
+            unsafe { bingham_log_normalization_constant(d, z.as_ptr(), &mut lf, w.as_mut_ptr()) };
+        if st != BINGHAM_OK {
+            return Err(format!("log F of the fit failed: {}", last_error()));
+        }
+        let s_fit = congruence(m, &w, d);
+        let s_in = c.inputs[0].as_ref().unwrap();
+        let tr: f64 = (0..d).map(|i| s_in[i * d + i]).sum();
+        for (a, b) in s_fit.iter().zip(s_in) {
+            if (a - b / tr).abs() > 1e-9 {
+                return Err(format!(
+                    "MLE round trip: |S_fit − S| = {:e}",
+                    (a - b / tr).abs()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check_pdf(_c: &Case, o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    let Some(p) = o[0].as_ref() else {
+        return Ok(()); // n = 0: NULL allowed
+    };
+    if let Some(i) = p.iter().position(|v| v.is_nan() || *v < 0.0) {
+        return Err(format!("p[{i}] = {} is not a density value", p[i]));
+    }
+    Ok(())
+}
+
+fn check_log_pdf(_c: &Case, _o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    Ok(()) // finiteness is checked for every output
+}
+
+fn check_finite_out(_c: &Case, _o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    Ok(())
+}
+
+fn check_kl(c: &Case, o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    let kl = o[0].as_ref().unwrap()[0];
+    // KL ≥ 0; rounding of terms as large as the concentrations allows a little below
+    let scale: f64 = [1, 3]
+        .iter()
+        .filter_map(|&i| c.inputs[i].as_ref())
+        .flat_map(|z| {
+            let mx = z.iter().cloned().fold(f64::MIN, f64::max);
+            z.iter().map(move |v| (v - mx).abs())
+        })
+        .fold(1.0, f64::max);
+    if kl < -1e-12 * scale {
+        return Err(format!("KL = {kl:e} < 0 (scale {scale:e})"));
+    }
+    Ok(())
+}
+
+fn check_sample(c: &Case, o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    let Some(x) = o[0].as_ref() else {
+        return Ok(()); // n = 0: NULL allowed
+    };
+    for (k, row) in x.chunks_exact(c.d).enumerate() {
+        check_unit(row, 1e-12).map_err(|e| format!("sample {k}: {e}"))?;
+    }
+    Ok(())
+}
+
+fn check_mode(c: &Case, o: &[Option<Vec<f64>>]) -> Result<(), String> {
+    let v = o[0].as_ref().unwrap();
+    check_unit(v, 1e-12)?;
+    if c.moderate && c.attack == Attack::None {
+        // the mode is the column of the input M with the largest z (when that is unique)
+        let (m, z) = (c.inputs[0].as_ref().unwrap(), c.inputs[1].as_ref().unwrap());
+        let d = c.d;
+        let top = (0..d).max_by(|&a, &b| z[a].total_cmp(&z[b])).unwrap();
+        if (0..d).filter(|&i| z[i] == z[top]).count() == 1 {
+            let dot: f64 = (0..d).map(|r| m[r * d + top] * v[r]).sum();
+            if (dot.abs() - 1.0).abs() > 1e-9 {
+                return Err(format!(
+                    "mode is not column {top} of M: |dot| = {}",
+                    dot.abs()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+// ---- drivers ----------------------------------------------------------------------------------
+
+fn total_cases() -> u64 {
+    env_count("BINGHAM_FUZZ_CASES", 120_000)
+}
+
+fn base_seed() -> u64 {
+    env_count("BINGHAM_FUZZ_SEED", 0)
+}
+
+fn stats_wanted() -> bool {
+    std::env::var_os("BINGHAM_FUZZ_STATS").is_some()
+}
+
+/// `Some((label, seed))` when a single case is to be reproduced.
+fn repro() -> Option<(String, u64)> {
+    let s = std::env::var("BINGHAM_FUZZ_REPRO").ok()?;
+    let (label, seed) = s
+        .rsplit_once(':')
+        .expect("BINGHAM_FUZZ_REPRO=<label>:<seed>");
+    Some((label.to_string(), seed.parse().expect("seed")))
+}
+
+/// The share of the cases for the distribution functions vs. the filter and the small helpers.
+const SHARE_DISTRIBUTION: f64 = 0.75;
+const SHARE_FILTER: f64 = 0.22;
+
+fn cases_for(weight: f64, total_weight: f64, share: f64) -> u64 {
+    ((total_cases() as f64) * share * weight / total_weight).ceil() as u64
+}
+
+/// Runs `count` cases of `label` from `gen_and_run(seed)`, collecting up to 20 failures.
+fn drive(
+    label: &'static str,
+    label_id: u64,
+    count: u64,
+    mut gen_and_run: impl FnMut(u64, bool) -> Result<&'static str, String>,
+) -> Stats {
+    let slot = CaseSlot::new(label);
+    let mut stats = Stats::default();
+    if let Some((l, seed)) = repro() {
+        if l == label {
+            slot.enter(seed);
+            let r = gen_and_run(seed, true);
+            slot.leave();
+            match r {
+                Ok(s) => eprintln!("{label} case seed {seed}: passed ({s})"),
+                Err(e) => panic!("{label} case seed {seed}: {e}"),
+            }
+        }
+        return stats;
+    }
+    let mut failures = Vec::new();
+    let start = Instant::now();
+    for i in 0..count {
+        let seed = mix(base_seed() ^ (label_id << 48) ^ i);
+        slot.enter(seed);
+        let r = gen_and_run(seed, false);
+        slot.leave();
+        stats.cases += 1;
+        match r {
+            Ok(s) => *stats.by_status.entry(s).or_default() += 1,
+            Err(e) => {
+                *stats.by_status.entry("FAILED").or_default() += 1;
+                if failures.len() < 20 {
+                    failures.push(format!(
+                        "  {label} case seed {seed}: {e}\n    reproduce: BINGHAM_FUZZ_REPRO={label}:{seed} \
+                         cargo test --release --test fuzz_ffi -- --nocapture"
+                    ));
+                }
+            }
+        }
+    }
+    stats.time = start.elapsed();
+    if stats_wanted() {
+        eprintln!(
+            "{label:<48} {:>9} cases {:>8.2} s {:>9.1} µs/case  {:?}",
+            stats.cases,
+            stats.time.as_secs_f64(),
+            stats.time.as_secs_f64() * 1e6 / stats.cases.max(1) as f64,
+            stats.by_status
+        );
+    }
+    let failed = stats.by_status.get("FAILED").copied().unwrap_or(0);
+    assert!(
+        failures.is_empty(),
+        "{failed} of {} {label} cases failed:\n{}",
+        stats.cases,
+        failures.join("\n")
+    );
+    stats
+}
+
+fn fuzz_spec(idx: usize) {
+    let spec = &SPECS[idx];
+    let total_weight: f64 = SPECS.iter().map(|s| s.weight).sum();
+    let count = cases_for(spec.weight, total_weight, SHARE_DISTRIBUTION);
+    drive(spec.name, idx as u64 + 1, count, |seed, verbose| {
+        let case = gen_case(idx, seed);
+        run_case(&case, verbose).map(status_name)
+    });
+}
+
+macro_rules! fuzz_tests {
+    ($($test:ident => $idx:expr),* $(,)?) => {
+        $(
+            #[test]
+            fn $test() {
+                fuzz_spec($idx);
+            }
+        )*
+        #[test]
+        fn every_function_has_a_test() {
+            let mut covered = vec![$($idx),*];
+            covered.sort();
+            assert_eq!(covered, (0..SPECS.len()).collect::<Vec<_>>());
+        }
+    };
+}
+
+fuzz_tests! {
+    fuzz_normalization_constant => 0,
+    fuzz_log_normalization_constant => 1,
+    fuzz_log_normalization_constant_saddlepoint => 2,
+    fuzz_log_normalization_hessian => 3,
+    fuzz_second_moment => 4,
+    fuzz_mle => 5,
+    fuzz_mle_samples => 6,
+    fuzz_multiply => 7,
+    fuzz_compose => 8,
+    fuzz_pdf => 9,
+    fuzz_log_pdf => 10,
+    fuzz_entropy => 11,
+    fuzz_kl_divergence => 12,
+    fuzz_sample => 13,
+    fuzz_rotate_left => 14,
+    fuzz_rotate_right => 15,
+    fuzz_mode => 16,
+}
+
+// ---- the filter: random call sequences ----------------------------------------------------------
+//
+// One case is one sequence: a filter (created with random, sometimes hostile, parameters) and a
+// "twin" created alike that receives only the calls that succeeded on the first. After every call:
+// on error the state (read with get_state) is bit-for-bit unchanged and the message names the
+// function; on success the state is a valid Bingham; and the two filters stay bit-identical, which
+// shows that a failed call also left the hidden state (warm start, noise caches) unaffected.
+
+/// A sentinel handle value: a pointer output that must stay untouched on error.
+fn handle_sentinel() -> *mut bingham_filter {
+    0xDEAD_BEE0usize as *mut bingham_filter
+}
+
+fn filter_state(f: *const bingham_filter, d: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut m = vec![0.0; d * d];
+    let mut z = vec![0.0; d];
+    // SAFETY: f is a live handle of dimension d; buffers of length d*d and d.
+    let st = unsafe { bingham_filter_get_state(f, m.as_mut_ptr(), z.as_mut_ptr()) };
+    assert_eq!(st, BINGHAM_OK, "get_state: {}", last_error());
+    (m, z)
+}
+
+fn state_bits(f: *const bingham_filter, d: usize) -> Vec<u64> {
+    let (m, z) = filter_state(f, d);
+    m.iter().chain(&z).map(|v| v.to_bits()).collect()
+}
+
+/// Filter noise parameters: mostly realistic (identity or rotated mode, |z| from 1e-3 to 1e7),
+/// sometimes extreme (up to 1e13 and beyond, all equal = uniform noise).
+fn filter_noise(rng: &mut Rng, d: usize) -> (Vec<f64>, Vec<f64>) {
+    let m = if rng.chance(0.5) {
+        identity(d)
+    } else {
+        orthogonal(rng, d)
+    };
+    let mut z: Vec<f64> = (0..d)
+        .map(|_| match rng.below(10) {
+            0 => 0.0,
+            1 => -rng.log_uniform(7.0, 13.0),
+            2 => -rng.log_uniform(-3.0, 0.0),
+            _ => -rng.log_uniform(0.0, 7.0),
+        })
+        .collect();
+    match rng.below(12) {
+        0 => z.iter_mut().for_each(|v| *v = 0.0),
+        1 => {
+            let v = -rng.log_uniform(0.0, 4.0);
+            z.iter_mut().for_each(|x| *x = v);
+        }
+        2 => {
+            let i = rng.below(d);
+            z[i] = -rng.log_uniform(13.0, 300.0);
+        }
+        _ => {}
+    }
+    // the mode column gets the largest z most of the time (zero-mean noise)
+    if rng.chance(0.8) {
+        let top = (0..d).max_by(|&a, &b| z[a].total_cmp(&z[b])).unwrap();
+        z.swap(0, top);
+        let mut zz = vec![0.0; d];
+        // column 0 of the identity is (1, 0, …): the identity quaternion is the mode
+        zz[0] = z[0];
+        zz[1..].copy_from_slice(&z[1..]);
+        z = zz;
+    }
+    (m, z)
+}
+
+/// A measurement relative to the current state: the mode, near it, antipodal, orthogonal, or
+/// random.
+fn filter_measurement(rng: &mut Rng, m: &[f64], d: usize) -> Vec<f64> {
+    let mode: Vec<f64> = (0..d).map(|r| m[r * d + d - 1]).collect();
+    match rng.below(6) {
+        0 => mode,
+        1 => mode.iter().map(|v| -v).collect(),
+        2 => (0..d).map(|r| m[r * d]).collect(), // orthogonal to the mode
+        3 => {
+            let s = rng.log_uniform(-8.0, 0.0);
+            let v: Vec<f64> = mode.iter().map(|x| x + s * rng.normal()).collect();
+            let n = norm(&v);
+            v.iter().map(|x| x / n).collect()
+        }
+        _ => unit_vector(rng, d),
+    }
+}
+
+/// What the next call does to one of its array arguments.
+#[derive(Debug, Clone, PartialEq)]
+enum FAttack {
+    None,
+    NullHandle,
+    MisalignedHandle,
+    Null(usize),
+    Misaligned(usize),
+    NonFinite(usize),
+    /// finite but not acceptable (e.g. non-unit, non-orthogonal) or extreme
+    Bad(usize),
+}
+
+struct FArgs {
+    arrays: Vec<Vec<f64>>,
+    kinds: Vec<Kind>,
+    attack: FAttack,
+    desc: String,
+}
+
+fn spoil_filter_args(rng: &mut Rng, a: &mut FArgs, d: usize) {
+    let k = a.arrays.len();
+    let r = rng.unit();
+    a.attack = if r < 0.70 || k == 0 {
+        FAttack::None
+    } else if r < 0.74 {
+        FAttack::NullHandle
+    } else if r < 0.76 {
+        FAttack::MisalignedHandle
+    } else if r < 0.81 {
+        FAttack::Null(rng.below(k))
+    } else if r < 0.84 {
+        FAttack::Misaligned(rng.below(k))
+    } else if r < 0.91 {
+        let i = rng.below(k);
+        let j = rng.below(a.arrays[i].len());
+        a.arrays[i][j] = non_finite(rng);
+        FAttack::NonFinite(i)
+    } else {
+        let i = rng.below(k);
+        let kind = a.kinds[i];
+        let what = spoil(rng, kind, &mut a.arrays[i], d);
+        a.desc = format!("{} spoiled: {what}", a.desc);
+        FAttack::Bad(i)
+    };
+}
+
+/// Calls one filter function on `f` with the arrays of `a` (as the attack says), sets
+/// `out_*` where the function has outputs; returns the status.
+///
+/// # Safety
+/// `f` is a live handle of dimension `d`; array lengths match the function.
+unsafe fn filter_call(
+    op: usize,
+    f: *mut bingham_filter,
+    a: &FArgs,
+    outs: &mut [Buf],
+    out_ptr: &mut [*mut bingham_filter; 1],
+    out_dim: &mut [usize; 2],
+) -> bingham_status {
+    let mut bufs: Vec<Buf> = a.arrays.iter().map(|v| Buf::from(v)).collect();
+    let mut p: Vec<*const f64> = bufs.iter_mut().map(|b| b.ptr() as *const f64).collect();
+    let mut fp = f;
+    let mut op_out: Vec<*mut f64> = outs.iter_mut().map(|b| b.ptr()).collect();
+    let n_in = p.len();
+    match a.attack {
+        FAttack::NullHandle => fp = std::ptr::null_mut(),
+        FAttack::MisalignedHandle => fp = f.cast::<u8>().wrapping_add(4).cast(),
+        FAttack::Null(i) if i < n_in => p[i] = std::ptr::null(),
+        FAttack::Null(i) if i - n_in < op_out.len() => op_out[i - n_in] = std::ptr::null_mut(),
+        FAttack::Misaligned(i) if i < n_in => p[i] = bufs[i].misaligned(1 + i % 7),
+        FAttack::Misaligned(i) if i - n_in < op_out.len() => {
+            op_out[i - n_in] = outs[i - n_in].misaligned(3)
+        }
+        _ => {}
+    }
+    let o = |i: usize| op_out.get(i).copied().unwrap_or(std::ptr::null_mut());
+    // SAFETY: forwarded; pointers are valid buffers, NULL, misaligned or the handle.
+    let st = unsafe {
+        match op {
+            0 => bingham_filter_predict(fp, p[0], p[1]),
+            1 => bingham_filter_predict_rotation(fp, p[0], p[1], p[2]),
+            2 => bingham_filter_update(fp, p[0], p[1], p[2]),
+            3 => bingham_filter_set_state(fp, p[0], p[1]),
+            4 => bingham_filter_log_likelihood(fp, p[0], p[1], p[2], o(0)),
+            5 => bingham_filter_get_state(fp, o(0), o(1)),
+            6 => bingham_filter_mode(fp, o(0)),
+            7 => {
+                let dp = if matches!(a.attack, FAttack::Null(_)) {
+                    std::ptr::null_mut()
+                } else if matches!(a.attack, FAttack::Misaligned(_)) {
+                    out_dim.as_mut_ptr().cast::<u8>().wrapping_add(3).cast()
+                } else {
+                    out_dim.as_mut_ptr()
+                };
+                bingham_filter_dim(fp, dp)
+            }
+            8 => {
+                let op = if matches!(a.attack, FAttack::Null(_)) {
+                    std::ptr::null_mut()
+                } else if matches!(a.attack, FAttack::Misaligned(_)) {
+                    out_ptr.as_mut_ptr().cast::<u8>().wrapping_add(2).cast()
+                } else {
+                    out_ptr.as_mut_ptr()
+                };
+                bingham_filter_clone(fp, op)
+            }
+            _ => unreachable!(),
+        }
+    };
+    for (i, b) in bufs.iter().enumerate() {
+        assert!(
+            b.values()
+                .iter()
+                .zip(&a.arrays[i])
+                .all(|(x, y)| x.to_bits() == y.to_bits())
+                && b.guards_ok(),
+            "filter op {op}: input {i} was modified"
+        );
+    }
+    st
+}
+
+const FILTER_OPS: [&str; 9] = [
+    "bingham_filter_predict",
+    "bingham_filter_predict_rotation",
+    "bingham_filter_update",
+    "bingham_filter_set_state",
+    "bingham_filter_log_likelihood",
+    "bingham_filter_get_state",
+    "bingham_filter_mode",
+    "bingham_filter_dim",
+    "bingham_filter_clone",
+];
+
+/// Runs one random sequence; returns the number of calls made and their statuses.
+fn filter_sequence(
+    seed: u64,
+    verbose: bool,
+    stats: &mut BTreeMap<String, u64>,
+) -> Result<u64, String> {
+    let mut rng = Rng::new(seed);
+    let mut calls = 0u64;
+    let count = |stats: &mut BTreeMap<String, u64>, op: &str, st: bingham_status| {
+        let op = op.trim_start_matches("bingham_filter_");
+        *stats
+            .entry(format!("{op}:{}", status_name(st)))
+            .or_default() += 1;
+    };
+
+    // --- creation, possibly hostile
+    let d_try = match rng.below(20) {
+        0 => *rng.pick(&[0usize, 1, 3, 5, 8, 64, 65, usize::MAX]),
+        1..=9 => 2,
+        _ => 4,
+    };
+    let dl = if (2..=64).contains(&d_try) { d_try } else { 2 };
+    let mut m0 = if rng.chance(0.3) {
+        identity(dl)
+    } else {
+        orthogonal(&mut rng, dl)
+    };
+    let mut z0 = if rng.chance(0.5) {
+        z_moderate(&mut rng, dl)
+    } else {
+        z_vector(&mut rng, dl)
+    };
+    let mut args = FArgs {
+        arrays: vec![m0.clone(), z0.clone()],
+        kinds: vec![M, Z],
+        attack: FAttack::None,
+        desc: String::new(),
+    };
+    if rng.chance(0.3) {
+        spoil_filter_args(&mut rng, &mut args, dl);
+    }
+    let mut out = [handle_sentinel()];
+    {
+        let mut bufs: Vec<Buf> = args.arrays.iter().map(|v| Buf::from(v)).collect();
+        let mut p: Vec<*const f64> = bufs.iter_mut().map(|b| b.ptr() as *const f64).collect();
+        let mut op = out.as_mut_ptr();
+        let dang = !(2..=64).contains(&d_try);
+        match args.attack {
+            FAttack::Null(i) => p[i] = std::ptr::null(),
+            FAttack::Misaligned(i) => p[i] = bufs[i].misaligned(5),
+            FAttack::NullHandle => op = std::ptr::null_mut(),
+            FAttack::MisalignedHandle => op = op.cast::<u8>().wrapping_add(1).cast(),
+            _ => {}
+        }
+        if dang {
+            p = vec![dangling(); 2];
+        }
+        prime_last_error("bingham_filter_new");
+        // SAFETY: buffers of length dl*dl and dl (dl = d_try when d_try is 2 or 4; otherwise
+        // the function must refuse d before reading; dangling pointers prove it).
+        let st = unsafe { bingham_filter_new(d_try, p[0], p[1], op) };
+        calls += 1;
+        count(stats, "new", st);
+        if verbose {
+            eprintln!(
+                "new(d = {d_try}, {:?}, attack {:?}) -> {}",
+                args.arrays,
+                args.attack,
+                status_name(st)
+            );
+        }
+        if st == BINGHAM_ERR_PANIC {
+            return Err(format!("bingham_filter_new panicked: {}", last_error()));
+        }
+        let want = if d_try != 2 && d_try != 4 {
+            Some(BINGHAM_ERR_INVALID_DIMENSION)
+        } else {
+            match args.attack {
+                FAttack::Null(_)
+                | FAttack::Misaligned(_)
+                | FAttack::NullHandle
+                | FAttack::MisalignedHandle => Some(BINGHAM_ERR_NULL_ARGUMENT),
+                FAttack::NonFinite(_) => Some(BINGHAM_ERR_INVALID_ARGUMENT),
+                _ => None,
+            }
+        };
+        if let Some(w) = want {
+            if st != w {
+                return Err(format!(
+                    "bingham_filter_new: status {} instead of {}",
+                    status_name(st),
+                    status_name(w)
+                ));
+            }
+        }
+        if st != BINGHAM_OK {
+            if out[0] != handle_sentinel() {
+                return Err("bingham_filter_new wrote *out on error".into());
+            }
+            check_error_message("bingham_filter_new")?;
+            // retry with valid parameters so that the sequence has a filter
+            let d = if rng.chance(0.5) { 2 } else { 4 };
+            m0 = orthogonal(&mut rng, d);
+            z0 = z_moderate(&mut rng, d);
+            // SAFETY: valid buffers.
+            let st = unsafe { bingham_filter_new(d, m0.as_ptr(), z0.as_ptr(), out.as_mut_ptr()) };
+            if st != BINGHAM_OK {
+                return Err(format!(
+                    "bingham_filter_new with valid parameters: {}",
+                    last_error()
+                ));
+            }
+        } else {
+            m0 = args.arrays[0].clone();
+            z0 = args.arrays[1].clone();
+        }
+    }
+    let mut f = out[0];
+    let d = m0.len().isqrt();
+    let mut twin: *mut bingham_filter = std::ptr::null_mut();
+    // SAFETY: the same (valid) parameters.
+    let st = unsafe { bingham_filter_new(d, m0.as_ptr(), z0.as_ptr(), &mut twin) };
+    if st != BINGHAM_OK {
+        return Err(format!("twin creation failed: {}", last_error()));
+    }
+    let (m, z) = filter_state(f, d);
+    check_state(&m, &z, d).map_err(|e| format!("new: state invalid: {e}"))?;
+
+    // noises reused during the sequence (exercising the caches) and fresh ones
+    let pool: Vec<(Vec<f64>, Vec<f64>)> = (0..3).map(|_| filter_noise(&mut rng, d)).collect();
+    let steps = 1 + rng.below(40);
+    let mut result = Ok(());
+    for step in 0..steps {
+        let op = match rng.below(20) {
+            0..=5 => 0,
+            6..=7 => 1,
+            8..=13 => 2,
+            14 => 3,
+            15..=16 => 4,
+            17 => 5,
+            18 => 6,
+            _ => {
+                if rng.chance(0.5) {
+                    7
+                } else {
+                    8
+                }
+            }
+        };
+        let name = FILTER_OPS[op];
+        let (sm, _) = filter_state(f, d);
+        let noise = if rng.chance(0.8) {
+            pool[rng.below(pool.len())].clone()
+        } else {
+            filter_noise(&mut rng, d)
+        };
+        let mut a = match op {
+            0 => FArgs {
+                arrays: vec![noise.0, noise.1],
+                kinds: vec![M, Z],
+                attack: FAttack::None,
+                desc: String::new(),
+            },
+            1 => FArgs {
+                arrays: vec![unit_vector(&mut rng, d), noise.0, noise.1],
+                kinds: vec![U, M, Z],
+                attack: FAttack::None,
+                desc: String::new(),
+            },
+            2 | 4 => FArgs {
+                arrays: vec![filter_measurement(&mut rng, &sm, d), noise.0, noise.1],
+                kinds: vec![U, M, Z],
+                attack: FAttack::None,
+                desc: String::new(),
+            },
+            3 => FArgs {
+                arrays: vec![orthogonal(&mut rng, d), z_vector(&mut rng, d)],
+                kinds: vec![M, Z],
+                attack: FAttack::None,
+                desc: String::new(),
+            },
+            _ => FArgs {
+                arrays: vec![],
+                kinds: vec![],
+                attack: FAttack::None,
+                desc: String::new(),
+            },
+        };
+        spoil_filter_args(&mut rng, &mut a, d);
+        // outputs: array outputs count as argument indices after the inputs
+        let out_kinds: &[Kind] = match op {
+            4 => &[One],
+            5 => &[DD, D],
+            6 => &[D],
+            _ => &[],
+        };
+        let n_args = a.arrays.len() + out_kinds.len() + usize::from(op == 7 || op == 8);
+        if matches!(a.attack, FAttack::None) && op >= 4 && rng.chance(0.25) {
+            let i = a.arrays.len() + rng.below(n_args - a.arrays.len());
+            a.attack = if rng.chance(0.5) {
+                FAttack::Null(i)
+            } else {
+                FAttack::Misaligned(i)
+            };
+        }
+        if matches!(a.attack, FAttack::None) && op >= 5 && rng.chance(0.1) {
+            a.attack = if rng.chance(0.5) {
+                FAttack::NullHandle
+            } else {
+                FAttack::MisalignedHandle
+            };
+        }
+        let mut outs: Vec<Buf> = out_kinds
+            .iter()
+            .map(|&k| Buf::sentinel(kind_len(k, d, 0)))
+            .collect();
+        let mut out_ptr = [handle_sentinel()];
+        let mut out_dim = [usize::MAX; 2];
+        let before = state_bits(f, d);
+        prime_last_error(name);
+        if verbose {
+            eprintln!(
+                "step {step}: {name} {:?} attack {:?} {}",
+                a.arrays, a.attack, a.desc
+            );
+        }
+        // SAFETY: f is live with dimension d; arrays have the lengths for d.
+        let st = unsafe { filter_call(op, f, &a, &mut outs, &mut out_ptr, &mut out_dim) };
+        calls += 1;
+        count(stats, name, st);
+        if verbose {
+            eprintln!("    -> {}", status_name(st));
+        }
+        let ctx = format!("step {step} {name} (attack {:?} {})", a.attack, a.desc);
+        let fail = |msg: String| Err(format!("{ctx}: {msg}"));
+        if st == BINGHAM_ERR_PANIC {
+            result = fail(format!("panic: {}", last_error()));
+            break;
+        }
+        let want = match a.attack {
+            FAttack::NullHandle
+            | FAttack::MisalignedHandle
+            | FAttack::Null(_)
+            | FAttack::Misaligned(_) => Some(BINGHAM_ERR_NULL_ARGUMENT),
+            FAttack::NonFinite(_) => Some(BINGHAM_ERR_INVALID_ARGUMENT),
+            _ => None,
+        };
+        if let Some(w) = want {
+            if st != w {
+                result = fail(format!(
+                    "status {} instead of {}",
+                    status_name(st),
+                    status_name(w)
+                ));
+                break;
+            }
+        }
+        let after = state_bits(f, d);
+        if st != BINGHAM_OK {
+            if after != before {
+                result = fail(format!(
+                    "failed with {} but changed the state",
+                    status_name(st)
+                ));
+                break;
+            }
+            if outs.iter().any(|b| !b.untouched())
+                || out_ptr[0] != handle_sentinel()
+                || out_dim != [usize::MAX; 2]
+            {
+                result = fail(format!(
+                    "failed with {} but wrote an output",
+                    status_name(st)
+                ));
+                break;
+            }
+            if let Err(e) = check_error_message(name) {
+                result = fail(e);
+                break;
+            }
+            if matches!(a.attack, FAttack::None) && op != 3 {
+                // valid arguments: the documented failures are NOT_CONVERGED / NUMERICAL only
+                if st != BINGHAM_ERR_NOT_CONVERGED && st != BINGHAM_ERR_NUMERICAL {
+                    result = fail(format!("valid arguments refused: {}", last_error()));
+                    break;
+                }
+                if verbose {
+                    eprintln!("    {}", last_error());
+                }
+            }
+            continue;
+        }
+        // success
+        if op >= 4 && after != before {
+            result = fail("a read-only call changed the state".into());
+            break;
+        }
+        let (m, z) = filter_state(f, d);
+        if let Err(e) = check_state(&m, &z, d) {
+            result = fail(format!("state invalid after success: {e}"));
+            break;
+        }
+        match op {
+            4 => {
+                let v = outs[0].values()[0];
+                if !v.is_finite() || !outs[0].guards_ok() {
+                    result = fail(format!("log-likelihood {v}"));
+                    break;
+                }
+            }
+            5 => {
+                let got: Vec<u64> = outs[0]
+                    .values()
+                    .iter()
+                    .chain(&outs[1].values())
+                    .map(|v| v.to_bits())
+                    .collect();
+                if got != after || !outs[0].guards_ok() || !outs[1].guards_ok() {
+                    result = fail("get_state output differs from the state".into());
+                    break;
+                }
+            }
+            6 => {
+                let v = outs[0].values();
+                let col: Vec<f64> = (0..d).map(|r| m[r * d + d - 1]).collect();
+                if v.iter().zip(&col).any(|(a, b)| a.to_bits() != b.to_bits())
+                    || !outs[0].guards_ok()
+                {
+                    result = fail(format!("mode {v:?} is not the last column of M {col:?}"));
+                    break;
+                }
+            }
+            7 => {
+                if out_dim[0] != d || out_dim[1] != usize::MAX {
+                    result = fail(format!("dim wrote {out_dim:?}"));
+                    break;
+                }
+            }
+            8 => {
+                let c = out_ptr[0];
+                if c.is_null() || c == handle_sentinel() {
+                    result = fail("clone returned no handle".into());
+                    break;
+                }
+                if state_bits(c, d) != after {
+                    result = fail("clone differs from the original".into());
+                    break;
+                }
+                // continue with the clone half of the time (the original is freed)
+                // SAFETY: both are live handles; the one not kept is freed once.
+                unsafe {
+                    if rng.chance(0.5) {
+                        bingham_filter_free(f);
+                        f = c;
+                    } else {
+                        bingham_filter_free(c);
+                    }
+                }
+            }
+            _ => {}
+        }
+        // the twin repeats the successful call (same arguments); states must agree bit for bit
+        if op <= 3 {
+            let mut twin_outs: Vec<Buf> = vec![];
+            let mut tp = [handle_sentinel()];
+            let mut td = [usize::MAX; 2];
+            // SAFETY: twin is live with dimension d.
+            let st2 = unsafe { filter_call(op, twin, &a, &mut twin_outs, &mut tp, &mut td) };
+            if st2 != BINGHAM_OK {
+                result = fail(format!("twin failed: {}", last_error()));
+                break;
+            }
+        }
+        if state_bits(twin, d) != state_bits(f, d) {
+            result = fail("the twin (which saw only the successful calls) differs: a failed call changed hidden state".into());
+            break;
+        }
+    }
+    // SAFETY: live handles, freed once; free(NULL) is a no-op.
+    unsafe {
+        bingham_filter_free(f);
+        bingham_filter_free(twin);
+        bingham_filter_free(std::ptr::null_mut());
+    }
+    result.map(|()| calls)
+}
+
+#[test]
+fn fuzz_filter_sequences() {
+    // each sequence makes ~20 calls on average: count calls, not sequences
+    let target = cases_for(1.0, 1.0, SHARE_FILTER);
+    let slot_label = "bingham_filter";
+    let mut stats: BTreeMap<String, u64> = BTreeMap::new();
+    let slot = CaseSlot::new(slot_label);
+    if let Some((l, seed)) = repro() {
+        if l == slot_label {
+            slot.enter(seed);
+            let r = filter_sequence(seed, true, &mut stats);
+            slot.leave();
+            match r {
+                Ok(n) => eprintln!("{slot_label} case seed {seed}: passed ({n} calls)"),
+                Err(e) => panic!("{slot_label} case seed {seed}: {e}"),
+            }
+        }
+        return;
+    }
+    let start = Instant::now();
+    let mut calls = 0u64;
+    let mut failures = Vec::new();
+    let mut i = 0u64;
+    while calls < target {
+        let seed = mix(base_seed() ^ (99 << 48) ^ i);
+        i += 1;
+        slot.enter(seed);
+        let r = filter_sequence(seed, false, &mut stats);
+        slot.leave();
+        match r {
+            Ok(n) => calls += n,
+            Err(e) => {
+                calls += 1;
+                if failures.len() < 20 {
+                    failures.push(format!(
+                        "  {slot_label} case seed {seed}: {e}\n    reproduce: BINGHAM_FUZZ_REPRO={slot_label}:{seed} \
+                         cargo test --release --test fuzz_ffi fuzz_filter -- --nocapture"
+                    ));
+                }
+            }
+        }
+    }
+    if stats_wanted() {
+        let t = start.elapsed().as_secs_f64();
+        eprintln!(
+            "{slot_label:<48} {calls:>9} calls ({i} sequences) {t:>8.2} s {:>9.1} µs/call  {stats:?}",
+            t * 1e6 / calls.max(1) as f64
+        );
+    }
+    assert!(
+        failures.is_empty(),
+        "{} filter sequences failed:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+// ---- the small helpers ------------------------------------------------------------------------
+
+#[test]
+fn fuzz_status_str_and_last_error_message() {
+    let count = cases_for(1.0, 1.0, 1.0 - SHARE_DISTRIBUTION - SHARE_FILTER);
+    let slot = CaseSlot::new("helpers");
+    let known: Vec<String> = (0..=6)
+        .map(|c| {
+            // SAFETY: any int is accepted; the result is a static C string.
+            let p = bingham_status_str(c);
+            assert!(!p.is_null());
+            // SAFETY: NUL-terminated static string.
+            unsafe { std::ffi::CStr::from_ptr(p) }
+                .to_str()
+                .unwrap()
+                .to_string()
+        })
+        .collect();
+    assert!(
+        known.iter().all(|s| !s.is_empty() && s != "unknown status"),
+        "{known:?}"
+    );
+    for i in 0..count {
+        let seed = mix(base_seed() ^ (77 << 48) ^ i);
+        slot.enter(seed);
+        let mut rng = Rng::new(seed);
+        // status_str with any int
+        let code = match rng.below(4) {
+            0 => rng.below(10) as i32 - 2,
+            1 => i32::MIN + rng.below(3) as i32,
+            2 => i32::MAX - rng.below(3) as i32,
+            _ => rng.next_u64() as i32,
+        };
+        let p = bingham_status_str(code);
+        assert!(!p.is_null(), "status_str({code}) is NULL");
+        // SAFETY: NUL-terminated static string.
+        let s = unsafe { std::ffi::CStr::from_ptr(p) }
+            .to_str()
+            .expect("UTF-8");
+        if (0..=6).contains(&code) {
+            assert_eq!(s, known[code as usize]);
+        } else {
+            assert_eq!(s, "unknown status", "status_str({code})");
+        }
+        // a failing call with a message of varying length (the row number varies; "‖" and
+        // other non-ASCII characters appear in some messages), then reads with random buffers
+        let d = 2 + rng.below(4);
+        let n = 1 + rng.below(2000);
+        let mut x = vec![0.0; n * d];
+        for r in 0..n {
+            x[r * d] = 1.0;
+        }
+        let bad = rng.below(n);
+        x[bad * d] = 1.5;
+        let (m, z) = (identity(d), vec![0.0; d]);
+        let mut p_out = vec![0.0; n];
+        // SAFETY: valid buffers.
+        let st = unsafe {
+            bingham_log_pdf(d, m.as_ptr(), z.as_ptr(), n, x.as_ptr(), p_out.as_mut_ptr())
+        };
+        assert_eq!(st, BINGHAM_ERR_INVALID_ARGUMENT);
+        let full = last_error();
+        assert!(full.contains(&format!("row {bad}")), "{full}");
+        let len = match rng.below(4) {
+            0 => 0,
+            1 => rng.below(full.len() + 3),
+            2 => full.len() + rng.below(3),
+            _ => 1 + rng.below(8),
+        };
+        let mut buf = vec![0xA5u8; len + 16];
+        let mut out_len = [usize::MAX; 2];
+        let buf_null = len > 0 && rng.chance(0.05);
+        let len_null = rng.chance(0.2);
+        let len_misaligned = !len_null && rng.chance(0.05);
+        let bp = if buf_null || (len == 0 && rng.chance(0.5)) {
+            std::ptr::null_mut()
+        } else {
+            // SAFETY: within buf.
+            unsafe { buf.as_mut_ptr().add(8) }.cast::<std::os::raw::c_char>()
+        };
+        let lp = if len_null {
+            std::ptr::null_mut()
+        } else if len_misaligned {
+            out_len
+                .as_mut_ptr()
+                .cast::<u8>()
+                .wrapping_add(1)
+                .cast::<usize>()
+        } else {
+            out_len.as_mut_ptr()
+        };
+        // SAFETY: bp is NULL or has len writable bytes (8 guard bytes on each side); lp NULL,
+        // valid, or misaligned (refused).
+        let st = unsafe { bingham_last_error_message(bp, len, lp) };
+        let ctx = format!("seed {seed}: len {len}, buf NULL {buf_null}, out_len NULL {len_null}, misaligned {len_misaligned}, message {full:?}");
+        assert!(
+            buf[..8].iter().all(|&b| b == 0xA5) && buf[8 + len..].iter().all(|&b| b == 0xA5),
+            "wrote outside the buffer: {ctx}"
+        );
+        assert_eq!(last_error(), full, "reading changed the message: {ctx}");
+        if buf_null || len_misaligned {
+            assert_eq!(st, BINGHAM_ERR_NULL_ARGUMENT, "{ctx}");
+            assert!(
+                buf.iter().all(|&b| b == 0xA5) && out_len == [usize::MAX; 2],
+                "wrote on error: {ctx}"
+            );
+            continue;
+        }
+        assert_eq!(st, BINGHAM_OK, "{ctx}");
+        if !len_null {
+            assert_eq!(out_len, [full.len(), usize::MAX], "{ctx}");
+        }
+        if len > 0 && !bp.is_null() {
+            let got = &buf[8..8 + len];
+            let nul = got.iter().position(|&b| b == 0).expect("NUL-terminated");
+            let s = std::str::from_utf8(&got[..nul]).expect("cut at a character boundary");
+            assert!(full.starts_with(s), "{ctx}");
+            assert!(nul <= len - 1, "{ctx}");
+            // as long as fits, but possibly shorter to stay on a character boundary
+            assert!(
+                nul == full.len().min(len - 1) || (full.len() >= len && nul + 4 > len - 1),
+                "{ctx}: copied {nul}"
+            );
+        } else {
+            assert!(buf.iter().all(|&b| b == 0xA5), "{ctx}");
+        }
+        slot.leave();
+    }
+}
