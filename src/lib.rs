@@ -12,10 +12,10 @@
 
 pub mod distribution;
 pub mod error;
-mod linalg;
 pub mod ffi;
 pub mod filter;
 mod fixed;
+mod linalg;
 pub mod mle;
 pub mod normalization;
 pub mod quaternion;
