@@ -330,7 +330,9 @@ pub(crate) fn moment_from_parts(m: &DMatrix<f64>, w: &DVector<f64>) -> DMatrix<f
 pub(crate) fn sym_eigen_ascending(c: DMatrix<f64>) -> Result<(DMatrix<f64>, DVector<f64>)> {
     let d = c.nrows();
     if !c.iter().all(|v| v.is_finite()) {
-        return Err(Error::Numerical("eigendecomposition of a non-finite matrix".into()));
+        return Err(Error::Numerical(
+            "eigendecomposition of a non-finite matrix".into(),
+        ));
     }
     let (eigenvalues, eigenvectors) = crate::linalg::jacobi_eigen(&c);
     let mut idx: Vec<usize> = (0..d).collect();
@@ -339,10 +341,10 @@ pub(crate) fn sym_eigen_ascending(c: DMatrix<f64>) -> Result<(DMatrix<f64>, DVec
     let mut vecs = DMatrix::zeros(d, d);
     for (k, &i) in idx.iter().enumerate() {
         let mut col = eigenvectors.column(i).into_owned();
-        let big =
-            col.iter()
-                .cloned()
-                .fold(0.0f64, |acc, v| if v.abs() > acc.abs() { v } else { acc });
+        let big = col
+            .iter()
+            .cloned()
+            .fold(0.0f64, |acc, v| if v.abs() > acc.abs() { v } else { acc });
         if big < 0.0 {
             col.neg_mut();
         }

@@ -316,7 +316,7 @@ fn pair_inverse(r: f64) -> f64 {
             break;
         }
         let w = g[0];
-        if ((w - r) / r).abs() <= 1e-12 || !(h[0] > 0.0) {
+        if ((w - r) / r).abs() <= 1e-12 || h[0].is_nan() || h[0] <= 0.0 {
             break;
         }
         // Newton on 1/ω − 1/r (nearly linear in x): Δ = ω²(1/ω − 1/r)/H11
