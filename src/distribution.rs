@@ -140,6 +140,11 @@ impl Bingham {
         Bingham { m: ms, z: zs }
     }
 
+    /// Wraps parameters that are already normalized (z ascending, `z_d = 0`, M orthonormal).
+    pub(crate) fn from_normalized_unchecked(m: DMatrix<f64>, z: DVector<f64>) -> Bingham {
+        Bingham { m, z }
+    }
+
     /// The dimension `d` (the sphere is S^{d−1} ⊂ R^d).
     pub fn dim(&self) -> usize {
         self.z.len()

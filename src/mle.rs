@@ -49,6 +49,12 @@ pub fn mle_from_second_moment(s: &DMatrix<f64>) -> Result<Bingham> {
         )));
     }
     let sym = (&sn + sn.transpose()) * 0.5;
+    // d = 2, 4: the same algorithm on stack arrays (the filter's allocation-free path).
+    match d {
+        2 => return fixed_mle::<2>(&sym),
+        4 => return fixed_mle::<4>(&sym),
+        _ => {}
+    }
     let (m, w) = sym_eigen_ascending(sym)?;
     if w[0] < OMEGA_MIN {
         return Err(Error::InvalidArgument(format!(
@@ -61,6 +67,20 @@ pub fn mle_from_second_moment(s: &DMatrix<f64>) -> Result<Bingham> {
     let z = solve_z(w.as_slice(), None)?;
     Ok(Bingham::from_parts_unchecked(
         m,
+        DVector::from_column_slice(&z),
+    ))
+}
+
+fn fixed_mle<const D: usize>(s: &DMatrix<f64>) -> Result<Bingham> {
+    let mut a = [[0.0; D]; D];
+    for (i, row) in a.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = s[(i, j)];
+        }
+    }
+    let (m, z, _) = crate::fixed::mle::<D>(&a, None)?;
+    Ok(Bingham::from_normalized_unchecked(
+        DMatrix::from_fn(D, D, |i, j| m[i][j]),
         DVector::from_column_slice(&z),
     ))
 }
