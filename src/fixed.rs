@@ -6,8 +6,8 @@
 //! [`crate::distribution`] and [`crate::mle`] step by step, so the two paths agree to rounding:
 //! validation and normalization of parameters (`Bingham::new`), second moments, the composition
 //! of moments, the symmetric eigendecomposition (the same Jacobi routine; for `D = 2` its single
-//! rotation written out), the moment-matching MLE (the algorithm of `mle::solve_z_into` step for
-//! step, able to resume from a previous solution whose derivatives are known) and the Bayes
+//! rotation written out), the moment-matching MLE (`mle::newton` itself, the general path's
+//! solver, here resuming from a previous solution whose derivatives are known) and the Bayes
 //! product. The unit tests below check bitwise agreement of the building blocks, `tests/filter.rs`
 //! the agreement of whole filter steps with the general path.
 //!
@@ -22,7 +22,7 @@
 use crate::distribution::{ORTHOGONALITY_TOL, UNIT_TOL};
 use crate::error::{Error, Result};
 use crate::linalg::jacobi_in_place;
-use crate::mle::{initial_guess, MLE_TOL, OMEGA_MIN};
+use crate::mle::{newton, NewtonStart, OMEGA_MIN};
 use crate::normalization::{log_normalization_into, Method};
 
 /// A `D×D` matrix, row-major (`m[i][j]`: row `i`, column `j`).
@@ -423,6 +423,7 @@ pub(crate) struct Derivs<const D: usize> {
     pub(crate) hess: Mat<D>,
 }
 
+#[cfg(test)]
 fn derivs<const D: usize>(z: &[f64; D]) -> Result<Derivs<D>> {
     let mut grad = [0.0; D];
     let mut h = [0.0; 16];
@@ -445,163 +446,34 @@ pub(crate) enum Start<'a, const D: usize> {
     Evaluated(&'a Derivs<D>),
 }
 
-/// Solves `A x = b` (`a` k×k row-major SPD, destroyed; `b` overwritten by `x`) by Cholesky, as
-/// `mle::cholesky_solve`; `false` if `A` is not numerically positive definite.
-#[inline(always)]
-fn cholesky_solve(k: usize, a: &mut [f64], b: &mut [f64]) -> bool {
-    for j in 0..k {
-        let mut s = a[j * k + j];
-        for p in 0..j {
-            s -= a[j * k + p] * a[j * k + p];
-        }
-        if s.is_nan() || s <= 0.0 {
-            return false;
-        }
-        let l = s.sqrt();
-        a[j * k + j] = l;
-        for i in j + 1..k {
-            let mut t = a[i * k + j];
-            for p in 0..j {
-                t -= a[i * k + p] * a[j * k + p];
-            }
-            a[i * k + j] = t / l;
-        }
-    }
-    for i in 0..k {
-        let mut t = b[i];
-        for p in 0..i {
-            t -= a[i * k + p] * b[p];
-        }
-        b[i] = t / a[i * k + i];
-    }
-    for i in (0..k).rev() {
-        let mut t = b[i];
-        for p in i + 1..k {
-            t -= a[p * k + i] * b[p];
-        }
-        b[i] = t / a[i * k + i];
-    }
-    true
-}
-
-/// Newton steps `solve_z` may take (as `mle::solve_z_into`).
-const MAX_ITER: usize = 200;
-
-/// Solves `ω(z) = target` (ascending, positive) for `z` (`z[D−1] = 0`), the algorithm of
-/// `mle::solve_z_into` step for step: Newton's method on `1/ω_i(z) − 1/ω̂_i`, `i < D`, with the
-/// exact Hessian, a backtracking line search on `Σ (ω̂_i/ω_i − 1)²`, tolerance `MLE_TOL` on
-/// `max_i |ω_i − ω̂_i|/ω̂_i`. For `D = 2` it is the scalar Newton iteration. Returns the
-/// solution with its derivatives (the next call's [`Start::Evaluated`]) and the number of steps.
-///
-/// The iterates are exactly those of `solve_z_into`. One saving: when the last step is expected
-/// to converge (quadratic convergence, judged from the previous step), its point is evaluated
-/// without the Hessian first; if it has converged, the returned Hessian is the previous
-/// iterate's (which differs by the tiny last step and only serves as the next warm start).
+/// Solves `ω(z) = target` (ascending, positive) for `z` (`z[D−1] = 0`) with the MLE's Newton
+/// iteration `mle::newton` (the same code as the general path), on stack arrays. Returns the
+/// solution with its derivatives (the next call's [`Start::Evaluated`]) and the number of steps;
+/// the returned Hessian may be the previous iterate's (see `mle::newton`).
 pub(crate) fn solve_z<const D: usize>(
     target: &[f64; D],
     start: Start<'_, D>,
 ) -> Result<(Derivs<D>, usize)> {
-    let k = D - 1;
-    let sum: f64 = target.iter().sum();
-    let mut t = [0.0; D];
-    for (ti, v) in t.iter_mut().zip(target.iter()) {
-        *ti = v / sum;
-    }
-    let mut cur = match start {
-        Start::Evaluated(d) => *d,
-        Start::Cold => {
-            let mut z = [0.0; D];
-            initial_guess(&t, &mut z);
-            derivs(&z)?
+    let mut z = [0.0; D];
+    let mut grad = [0.0; D];
+    let mut h = [0.0; 16];
+    let from = match start {
+        Start::Evaluated(d) => {
+            z = d.z;
+            grad = d.grad;
+            for (i, row) in d.hess.iter().enumerate() {
+                h[i * D..(i + 1) * D].copy_from_slice(row);
+            }
+            NewtonStart::Evaluated
         }
+        Start::Cold => NewtonStart::Guess,
     };
-    let resid = |g: &[f64; D]| -> f64 {
-        (0..k)
-            .map(|i| ((g[i] - t[i]) / t[i]).abs())
-            .fold(0.0, f64::max)
-    };
-    let merit = |g: &[f64; D]| -> f64 { (0..k).map(|i| (t[i] / g[i] - 1.0).powi(2)).sum() };
-    let mut phi = merit(&cur.grad);
-    let mut previous_resid: Option<f64> = None;
-    for iter in 0..MAX_ITER {
-        let r = resid(&cur.grad);
-        if r <= MLE_TOL {
-            return Ok((cur, iter));
-        }
-        // Newton converges quadratically, r_next ≈ K r² with K estimated from the last step.
-        // When the next full step is expected to end the iteration, evaluate it without the
-        // Hessian first (cheaper); the iterates are unchanged, only the returned Hessian then
-        // belongs to the previous iterate (good enough for a warm start).
-        let finishing = previous_resid.is_some_and(|rp| (r / (rp * rp)) * r * r <= 1e-2 * MLE_TOL);
-        previous_resid = Some(r);
-        let mut jac = [0.0; 9];
-        let mut step = [0.0; D];
-        for a in 0..k {
-            for b in 0..k {
-                jac[a * k + b] = cur.hess[a][b];
-            }
-            let g = cur.grad[a];
-            step[a] = g * g * (1.0 / g - 1.0 / t[a]);
-        }
-        if !cholesky_solve(k, &mut jac[..k * k], &mut step[..k])
-            || !step[..k].iter().all(|v| v.is_finite())
-        {
-            return Err(Error::NotConverged(
-                "MLE: the Hessian of log F is not numerically positive definite".into(),
-            ));
-        }
-        let mut alpha = 1.0;
-        let mut accepted = None;
-        for _ls in 0..60 {
-            let mut trial = [0.0; D];
-            for i in 0..k {
-                trial[i] = cur.z[i] + alpha * step[i];
-            }
-            trial[k] = 0.0;
-            if finishing && alpha == 1.0 {
-                let mut grad = [0.0; D];
-                if log_normalization_into(&trial, Method::Exact, Some(&mut grad), None).is_ok()
-                    && resid(&grad) <= MLE_TOL
-                {
-                    let hess = cur.hess;
-                    return Ok((
-                        Derivs {
-                            z: trial,
-                            grad,
-                            hess,
-                        },
-                        iter + 1,
-                    ));
-                }
-            }
-            if let Ok(next) = derivs(&trial) {
-                let p = merit(&next.grad);
-                if p < phi * (1.0 - 1e-4 * alpha) || resid(&next.grad) <= MLE_TOL {
-                    phi = p;
-                    accepted = Some(next);
-                    break;
-                }
-            }
-            alpha *= 0.5;
-        }
-        match accepted {
-            Some(next) => cur = next,
-            None => {
-                // The rounding floor of ω is reached: accept when already close.
-                if resid(&cur.grad) <= 1e3 * MLE_TOL {
-                    return Ok((cur, iter));
-                }
-                return Err(Error::NotConverged(format!(
-                    "MLE: line search failed at relative residual {:e}",
-                    resid(&cur.grad)
-                )));
-            }
-        }
+    let steps = newton(target, from, &mut z, &mut grad, &mut h[..D * D])?;
+    let mut hess = zeros::<D>();
+    for (i, row) in hess.iter_mut().enumerate() {
+        row.copy_from_slice(&h[i * D..(i + 1) * D]);
     }
-    Err(Error::NotConverged(format!(
-        "MLE: no convergence in {MAX_ITER} Newton steps (relative residual {:e})",
-        resid(&cur.grad)
-    )))
+    Ok((Derivs { z, grad, hess }, steps))
 }
 
 /// The Bingham distribution with second moment `s` (symmetric PSD, any positive scale), as

@@ -196,17 +196,61 @@ fn cholesky_solve(k: usize, a: &mut [f64], b: &mut [f64]) -> bool {
 }
 
 /// Allocation-free for d ≤ 4: solves `ω(z) = target` into `z_out`; returns the number of
-/// Newton steps taken.
-///
-/// Newton's method on `G_i(z) = 1/ω_i(z) − 1/ω̂_i` (i < d): `1/ω_i ≈ 2|z_i|` for large
-/// concentrations, so `G` is nearly linear where `ω` itself is not, and one or two steps
-/// suffice from the Gaussian start `z_i = 1/(2ω̂_d) − 1/(2ω̂_i)`. The Jacobian is
-/// `−diag(1/ω²) H` with `H` the exact Hessian of `log F`; the step solves `H Δ = ω² ∘ G`. A
-/// backtracking line search on `Σ (ω̂_i/ω_i − 1)²` safeguards it.
+/// Newton steps taken. `start`: an optional initial guess (any shift).
 pub(crate) fn solve_z_into(
     target: &[f64],
     start: Option<&[f64]>,
     z_out: &mut [f64],
+) -> Result<usize> {
+    let d = target.len();
+    let mut z = [0.0; MAX_DIM];
+    let mut grad = [0.0; MAX_DIM];
+    let mut hess = Scratch::new(d * d);
+    let from = match start {
+        Some(s) if s.len() == d && s.iter().all(|v| v.is_finite()) => {
+            let top = s[d - 1];
+            for i in 0..d {
+                z[i] = s[i] - top;
+            }
+            NewtonStart::Point
+        }
+        _ => NewtonStart::Guess,
+    };
+    let steps = newton(target, from, &mut z[..d], &mut grad[..d], hess.get())?;
+    z_out.copy_from_slice(&z[..d]);
+    Ok(steps)
+}
+
+/// Where [`newton`] starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum NewtonStart {
+    /// From [`initial_guess`].
+    Guess,
+    /// From the point in `z` (`z[d−1] = 0`).
+    Point,
+    /// From the point in `z` whose gradient and Hessian are already in `grad` and `hess`.
+    Evaluated,
+}
+
+/// The MLE's Newton iteration, allocation-free for d ≤ 4. Solves `ω(z) = target` (ascending,
+/// positive; normalized by its sum) for `z` (`z[d−1] = 0`). On success `z`, `grad` and `hess`
+/// (d×d row-major) hold the solution and the derivatives of `log F` there, and the number of
+/// steps is returned.
+///
+/// Newton's method on `G_i(z) = 1/ω_i(z) − 1/ω̂_i` (i < d): `1/ω_i ≈ 2|z_i|` for large
+/// concentrations, so `G` is nearly linear where `ω` itself is not, and few steps suffice from
+/// [`initial_guess`]. The Jacobian is `−diag(1/ω²) H` with `H` the exact Hessian of `log F`;
+/// the step solves `H Δ = ω² ∘ G`. A backtracking line search on `Σ (ω̂_i/ω_i − 1)²`
+/// safeguards it; tolerance `MLE_TOL` on `max_i |ω_i − ω̂_i|/ω̂_i`. When a full step is
+/// expected to end the iteration (quadratic convergence, judged from the previous step) its
+/// point is evaluated without the Hessian first; if it has converged, the returned Hessian is
+/// the previous iterate's (it then only serves as a warm start).
+pub(crate) fn newton(
+    target: &[f64],
+    from: NewtonStart,
+    z: &mut [f64],
+    grad: &mut [f64],
+    hess: &mut [f64],
 ) -> Result<usize> {
     let d = target.len();
     let k = d - 1;
@@ -215,15 +259,12 @@ pub(crate) fn solve_z_into(
     for i in 0..d {
         t[i] = target[i] / sum;
     }
-    let mut z = [0.0; MAX_DIM];
-    match start {
-        Some(s) if s.len() == d && s.iter().all(|v| v.is_finite()) => {
-            let top = s[d - 1];
-            for i in 0..d {
-                z[i] = s[i] - top;
-            }
-        }
-        _ => initial_guess(&t[..d], &mut z[..d]),
+    let t = &t[..d];
+    if from == NewtonStart::Guess {
+        initial_guess(t, z);
+    }
+    if from != NewtonStart::Evaluated {
+        log_normalization_into(z, Method::Exact, Some(&mut *grad), Some(&mut *hess))?;
     }
     let resid = |g: &[f64]| -> f64 {
         (0..k)
@@ -231,31 +272,27 @@ pub(crate) fn solve_z_into(
             .fold(0.0, f64::max)
     };
     let merit = |g: &[f64]| -> f64 { (0..k).map(|i| (t[i] / g[i] - 1.0).powi(2)).sum() };
-    let mut grad = [0.0; MAX_DIM];
     let mut tgrad = [0.0; MAX_DIM];
-    let mut hess = Scratch::new(d * d);
+    let tgrad = &mut tgrad[..d];
     let mut thess = Scratch::new(d * d);
     let mut jac = Scratch::new(k * k);
     let mut step = [0.0; MAX_DIM];
     let mut trial = [0.0; MAX_DIM];
-    log_normalization_into(
-        &z[..d],
-        Method::Exact,
-        Some(&mut grad[..d]),
-        Some(hess.get()),
-    )?;
-    let mut phi = merit(&grad[..d]);
+    let trial = &mut trial[..d];
+    let mut phi = merit(grad);
+    let mut previous_resid: Option<f64> = None;
     for iter in 0..MAX_ITER {
-        if resid(&grad[..d]) <= MLE_TOL {
-            z_out.copy_from_slice(&z[..d]);
+        let r = resid(grad);
+        if r <= MLE_TOL {
             return Ok(iter);
         }
+        let finishing = previous_resid.is_some_and(|rp| (r / (rp * rp)) * r * r <= 1e-2 * MLE_TOL);
+        previous_resid = Some(r);
         {
-            let h = hess.get();
             let j = jac.get();
             for a in 0..k {
                 for b in 0..k {
-                    j[a * k + b] = h[a * d + b];
+                    j[a * k + b] = hess[a * d + b];
                 }
                 step[a] = grad[a] * grad[a] * (1.0 / grad[a] - 1.0 / t[a]);
             }
@@ -273,15 +310,20 @@ pub(crate) fn solve_z_into(
                 trial[i] = z[i] + alpha * step[i];
             }
             trial[k] = 0.0;
-            let ok = log_normalization_into(
-                &trial[..d],
-                Method::Exact,
-                Some(&mut tgrad[..d]),
-                Some(thess.get()),
-            );
+            if finishing
+                && alpha == 1.0
+                && log_normalization_into(trial, Method::Exact, Some(&mut *tgrad), None).is_ok()
+                && resid(tgrad) <= MLE_TOL
+            {
+                z.copy_from_slice(trial);
+                grad.copy_from_slice(tgrad);
+                return Ok(iter + 1);
+            }
+            let ok =
+                log_normalization_into(trial, Method::Exact, Some(&mut *tgrad), Some(thess.get()));
             if ok.is_ok() {
-                let p = merit(&tgrad[..d]);
-                if p < phi * (1.0 - 1e-4 * alpha) || resid(&tgrad[..d]) <= MLE_TOL {
+                let p = merit(tgrad);
+                if p < phi * (1.0 - 1e-4 * alpha) || resid(tgrad) <= MLE_TOL {
                     accepted = true;
                     phi = p;
                     break;
@@ -291,22 +333,21 @@ pub(crate) fn solve_z_into(
         }
         if !accepted {
             // The rounding floor of ω is reached: accept when already close.
-            if resid(&grad[..d]) <= 1e3 * MLE_TOL {
-                z_out.copy_from_slice(&z[..d]);
+            if resid(grad) <= 1e3 * MLE_TOL {
                 return Ok(iter);
             }
             return Err(Error::NotConverged(format!(
                 "MLE: line search failed at relative residual {:e}",
-                resid(&grad[..d])
+                resid(grad)
             )));
         }
-        z[..d].copy_from_slice(&trial[..d]);
-        grad[..d].copy_from_slice(&tgrad[..d]);
-        std::mem::swap(&mut hess, &mut thess);
+        z.copy_from_slice(trial);
+        grad.copy_from_slice(tgrad);
+        hess.copy_from_slice(thess.get());
     }
     Err(Error::NotConverged(format!(
         "MLE: no convergence in {MAX_ITER} Newton steps (relative residual {:e})",
-        resid(&grad[..d])
+        resid(grad)
     )))
 }
 
