@@ -85,7 +85,6 @@ fn named_cases() {
 #[test]
 fn tiny_omega_gives_huge_concentration() {
     // ω_i down to 1e-7 must give z_i near −5e6
-    let d = 4;
     let w = [1e-7, 2e-7, 1e-3];
     let last = 1.0 - w.iter().sum::<f64>();
     let s = DMatrix::from_diagonal(&DVector::from_vec(vec![w[0], w[1], w[2], last]));

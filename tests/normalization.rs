@@ -191,6 +191,7 @@ fn hessian_matches_finite_differences_of_gradient() {
 
 /// Brute force for d = 3: tensor Gauss–Legendre in (cos θ, φ) over the sphere, independent of
 /// every 1-D formula. Returns (F, E[x_i²]).
+#[allow(clippy::needless_range_loop)]
 fn brute_force_d3(z: &[f64]) -> (f64, [f64; 3]) {
     let n = 400;
     let (xs, ws) = gauss_legendre(n);
