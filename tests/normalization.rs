@@ -242,6 +242,7 @@ fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
 }
 
 #[test]
+#[allow(clippy::needless_range_loop)]
 fn d3_matches_brute_force_sphere_quadrature() {
     for z in [
         [-1.0, -0.5, 0.0],
