@@ -415,6 +415,13 @@ impl<const D: usize> Core<D> {
         for (o, v) in zp.iter_mut().zip(l.iter()) {
             *o = v - top;
         }
+        // As in the update: the posterior's concentrations may overflow (a state or noise near
+        // the largest double); that is a numerical failure, not an invalid argument.
+        if !zp.iter().all(|v| v.is_finite()) {
+            return Err(Error::Numerical(
+                "log-likelihood: the posterior concentrations are not finite".into(),
+            ));
+        }
         let (lf_post, _) = fixed::log_f_omega(&zp)?;
         let (lf_state, _) = fixed::log_f_omega(&self.z)?;
         let value = lf_post + top - lf_state - noise.log_f;

@@ -293,11 +293,16 @@ pub fn check_state(m: &[f64], z: &[f64], d: usize) -> Result<(), String> {
 
 /// Probabilities ω: finite, ≥ 0, Σ = 1 within `STATE_TOL`.
 pub fn check_omega(w: &[f64]) -> Result<(), String> {
+    check_omega_tol(w, STATE_TOL)
+}
+
+/// Probabilities ω: finite, ≥ 0, Σ = 1 within `tol`.
+pub fn check_omega_tol(w: &[f64], tol: f64) -> Result<(), String> {
     if let Some(i) = w.iter().position(|v| !v.is_finite() || *v < 0.0) {
         return Err(format!("ω[{i}] = {} is not a probability", w[i]));
     }
     let s: f64 = w.iter().sum();
-    if (s - 1.0).abs() > STATE_TOL {
+    if (s - 1.0).abs() > tol {
         return Err(format!("Σω = 1 + {:e}", s - 1.0));
     }
     Ok(())
@@ -317,8 +322,19 @@ pub fn check_unit(v: &[f64], tol: f64) -> Result<(), String> {
 
 // ---- sentinel-guarded buffers -----------------------------------------------------------------
 
-/// Words of guard before and after each buffer.
-pub const GUARD: usize = 4;
+/// Words of guard before and after each buffer: 4, or 0 with `BINGHAM_FUZZ_EXACT_BUFFERS=1`
+/// (then every buffer is allocated with exactly its length, so that valgrind flags any access
+/// beyond it; the guard-word checks are then vacuous).
+pub fn guard_words() -> usize {
+    static G: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *G.get_or_init(|| {
+        if std::env::var_os("BINGHAM_FUZZ_EXACT_BUFFERS").is_some_and(|v| v != "0") {
+            0
+        } else {
+            4
+        }
+    })
+}
 
 /// The fill pattern: a signalling NaN whose payload encodes the index, so a left-over sentinel
 /// is never a valid (finite) output and shuffled words are noticed.
@@ -330,38 +346,42 @@ pub fn sentinel(i: usize) -> u64 {
 /// deliberately misaligned pointer still points into owned memory).
 pub struct Buf {
     words: Vec<u64>,
+    guard: usize,
     pub len: usize,
 }
 
 impl Buf {
     /// Filled with the sentinel pattern (an output).
     pub fn sentinel(len: usize) -> Buf {
-        let words = (0..len + 2 * GUARD + 1).map(sentinel).collect();
-        Buf { words, len }
+        let guard = guard_words();
+        let spare = usize::from(guard > 0);
+        let words = (0..len + 2 * guard + spare).map(sentinel).collect();
+        Buf { words, guard, len }
     }
 
     /// Holding `data` (an input), guards filled with the sentinel pattern.
     pub fn from(data: &[f64]) -> Buf {
         let mut b = Buf::sentinel(data.len());
-        for (w, v) in b.words[GUARD..].iter_mut().zip(data) {
+        let g = b.guard;
+        for (w, v) in b.words[g..].iter_mut().zip(data) {
             *w = v.to_bits();
         }
         b
     }
 
     pub fn ptr(&mut self) -> *mut f64 {
-        // SAFETY: GUARD < words.len().
-        unsafe { self.words.as_mut_ptr().add(GUARD).cast::<f64>() }
+        // SAFETY: guard <= words.len() (one past the end at most, for an empty exact buffer).
+        unsafe { self.words.as_mut_ptr().add(self.guard).cast::<f64>() }
     }
 
-    /// A pointer `offset` bytes (1..8) past the start: not aligned for `double`.
+    /// A pointer `offset` bytes (1..8) past the start: not aligned for `double`. Within the
+    /// allocation when it holds at least one word; never dereferenced by a correct library.
     pub fn misaligned(&mut self, offset: usize) -> *mut f64 {
-        // SAFETY: within the allocation (one spare word at the end).
-        unsafe { self.ptr().cast::<u8>().add(offset).cast::<f64>() }
+        self.ptr().cast::<u8>().wrapping_add(offset).cast::<f64>()
     }
 
     pub fn values(&self) -> Vec<f64> {
-        self.words[GUARD..GUARD + self.len]
+        self.words[self.guard..self.guard + self.len]
             .iter()
             .map(|&w| f64::from_bits(w))
             .collect()
@@ -374,8 +394,8 @@ impl Buf {
     /// The guard words are intact.
     pub fn guards_ok(&self) -> bool {
         let n = self.words.len();
-        (0..GUARD)
-            .chain(GUARD + self.len..n)
+        (0..self.guard)
+            .chain(self.guard + self.len..n)
             .all(|i| self.words[i] == sentinel(i))
     }
 
@@ -389,7 +409,7 @@ impl Buf {
 
     /// No body word holds its sentinel any more (everything was written).
     pub fn fully_written(&self) -> bool {
-        (GUARD..GUARD + self.len).all(|i| self.words[i] != sentinel(i))
+        (self.guard..self.guard + self.len).all(|i| self.words[i] != sentinel(i))
     }
 }
 

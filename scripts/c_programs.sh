@@ -1,0 +1,68 @@
+# Shared by scripts/sanitize.sh and scripts/valgrind.sh (sourced, not run): finds the C/C++
+# programs (c_tests/*.c, c_tests/*.cpp, examples/c/*.c, examples/c/*.cpp), builds them against
+# the static library with extra flags, and runs them.
+#
+# Environment: CARGO_TARGET_DIR (default target), CARGO (default cargo), CC (default cc),
+# CXX (default c++), EIGEN3_INCLUDE_DIR (default /usr/include/eigen3).
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+TARGET_DIR=${CARGO_TARGET_DIR:-$ROOT/target}
+LIB="$TARGET_DIR/release/libbingham.a"
+CARGO=${CARGO:-cargo}
+CC=${CC:-cc}
+CXX=${CXX:-c++}
+STATIC_LIBS=(-lpthread -ldl -lm)
+
+eigen_dir() {
+    local d
+    for d in "${EIGEN3_INCLUDE_DIR:-}" /usr/include/eigen3 /usr/local/include/eigen3; do
+        if [ -n "$d" ] && [ -f "$d/Eigen/Dense" ]; then
+            echo "$d"
+            return 0
+        fi
+    done
+    return 1
+}
+
+# Builds (or confirms up to date) libbingham.a, release profile.
+ensure_library() {
+    (cd "$ROOT" && "$CARGO" build --release --lib --quiet)
+    [ -f "$LIB" ] || { echo "no $LIB after cargo build" >&2; return 1; }
+}
+
+# Prints the program sources, one per line.
+program_sources() {
+    local f
+    for f in "$ROOT"/c_tests/*.c "$ROOT"/c_tests/*.cpp "$ROOT"/examples/c/*.c "$ROOT"/examples/c/*.cpp; do
+        [ -e "$f" ] && echo "$f"
+    done
+}
+
+# build_program SOURCE OUTDIR FLAGS... : compiles SOURCE against libbingham.a into OUTDIR and
+# prints the executable's path. Programs that include Eigen get it as a system include (a
+# program that needs Eigen is skipped, with a note on stderr, when Eigen is not installed).
+build_program() {
+    local src=$1 outdir=$2
+    shift 2
+    local name exe compiler std extra=()
+    name=$(basename "${src%.*}")
+    case "$src" in
+        "$ROOT"/examples/*) name="example_$name" ;;
+    esac
+    exe="$outdir/$name"
+    case "$src" in
+        *.cpp) compiler=$CXX std=-std=c++11 ;;
+        *) compiler=$CC std=-std=c99 ;;
+    esac
+    if grep -q '#include <Eigen/' "$src"; then
+        local e
+        if ! e=$(eigen_dir); then
+            echo "skipping $src: Eigen 3 not found (install libeigen3-dev or set EIGEN3_INCLUDE_DIR)" >&2
+            return 2
+        fi
+        extra+=(-isystem "$e")
+    fi
+    "$compiler" "$std" -Wall -Wextra "$@" -I"$ROOT/include" -I"$ROOT/c_tests" "${extra[@]}" \
+        "$src" "$LIB" "${STATIC_LIBS[@]}" -o "$exe" >&2 || return 1
+    echo "$exe"
+}
