@@ -66,3 +66,30 @@ build_program() {
         "$src" "$LIB" "${STATIC_LIBS[@]}" -o "$exe" >&2 || return 1
     echo "$exe"
 }
+
+# run_programs CHECK_FUNCTION: runs `CHECK_FUNCTION SOURCE` for every program, JOBS at a time
+# (default: the number of CPUs). The function prints its report and returns 0 (ok), 1 (failed)
+# or 2 (skipped). Reports are printed in program order; returns 1 if any failed or none ran.
+run_programs() {
+    local check=$1 jobs=${JOBS:-$(nproc 2>/dev/null || echo 2)}
+    local tmp i=0 src failed=0 ran=0
+    tmp=$(mktemp -d)
+    while read -r src; do
+        while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do sleep 0.2; done
+        ( set +e; "$check" "$src" >"$tmp/$i.out" 2>&1; echo $? >"$tmp/$i.rc" ) &
+        i=$((i + 1))
+    done < <(program_sources)
+    wait
+    local k
+    for ((k = 0; k < i; k++)); do
+        cat "$tmp/$k.out"
+        case $(cat "$tmp/$k.rc") in
+            0) ran=$((ran + 1)) ;;
+            2) ;;
+            *) ran=$((ran + 1)); failed=1 ;;
+        esac
+    done
+    rm -rf "$tmp"
+    RAN=$ran
+    [ "$ran" -gt 0 ] && [ "$failed" -eq 0 ]
+}

@@ -2,13 +2,13 @@
 # `make valgrind`: runs under valgrind (memcheck), failing on any error or definite/indirect leak:
 #
 # 1. every C/C++ test (c_tests/) and example (examples/c/), built without sanitizers against
-#    the static library;
+#    the static library (JOBS at a time, default the number of CPUs);
 # 2. the Rust fuzz harness of the C ABI (tests/fuzz_ffi.rs) with exactly-sized buffers
 #    (BINGHAM_FUZZ_EXACT_BUFFERS=1), so that any read or write of the library beyond a caller's
-#    array, or of uninitialized memory, is reported. BINGHAM_VALGRIND_FUZZ_CASES cases
+#    array, or any use of uninitialized memory, is reported. BINGHAM_VALGRIND_FUZZ_CASES cases
 #    (default 20000; 0 skips this part).
 #
-# Installs valgrind with apt-get when it is missing and we are root (or sudo is available).
+# Installs valgrind with apt-get when it is missing (as root, or with sudo).
 set -euo pipefail
 . "$(dirname "$0")/c_programs.sh"
 
@@ -26,36 +26,35 @@ VALGRIND=(valgrind -q --error-exitcode=99 --leak-check=full
 ensure_library
 OUT="$TARGET_DIR/valgrind"
 mkdir -p "$OUT"
-failed=0
-ran=0
-start=$SECONDS
-while read -r src; do
+
+check_one() {
+    local src=$1 rel exe rc t0
     rel=${src#"$ROOT"/}
-    set +e
+    t0=$SECONDS
     exe=$(build_program "$src" "$OUT" -g -O2)
     rc=$?
-    set -e
-    if [ $rc -eq 2 ]; then continue; fi
+    [ $rc -eq 2 ] && return 2
     if [ $rc -ne 0 ]; then
         echo "FAIL $rel: does not compile"
-        failed=1
-        continue
+        return 1
     fi
-    t0=$SECONDS
     if (cd "$OUT" && "${VALGRIND[@]}" "$exe" >"$exe.log" 2>&1); then
-        echo "ok   $rel ($((SECONDS - t0)) s)"
+        echo "ok   $rel ($((SECONDS - t0)) s, build and run)"
     else
         echo "FAIL $rel (exit status $?); output:"
         tail -n 60 "$exe.log"
-        failed=1
+        return 1
     fi
-    ran=$((ran + 1))
-done < <(program_sources)
+}
+
+start=$SECONDS
+failed=0
+run_programs check_one || failed=1
 
 cases=${BINGHAM_VALGRIND_FUZZ_CASES:-20000}
 if [ "$cases" != 0 ]; then
-    # cargo runs the test executable through the runner (only test executables; build scripts
-    # and the compiler run natively)
+    # cargo runs the test executable through the runner (build scripts and the compiler run
+    # natively)
     host=$(rustc -vV | sed -n 's/^host: //p')
     runner_var="CARGO_TARGET_$(echo "$host" | tr 'a-z-' 'A-Z_')_RUNNER"
     t0=$SECONDS
@@ -70,12 +69,8 @@ if [ "$cases" != 0 ]; then
     fi
 fi
 
-if [ $ran -eq 0 ]; then
-    echo "valgrind: no program was run"
-    exit 1
-fi
 if [ $failed -ne 0 ]; then
     echo "valgrind: FAILED"
     exit 1
 fi
-echo "valgrind: $ran programs and the fuzz harness clean ($((SECONDS - start)) s)"
+echo "valgrind: $RAN programs and the fuzz harness clean ($((SECONDS - start)) s)"
