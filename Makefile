@@ -2,6 +2,9 @@
 #
 #   make demo                    build the library, then build and run the C/C++ examples
 #   make test                    everything CI runs (installs missing tools first, see `deps`)
+#   make sanitize                C/C++ tests and examples under ASan + UBSan + LSan (in `test`)
+#   make valgrind                the same programs and the C ABI fuzz harness under valgrind
+#   make fuzz                    long reliability runs: 10^7 fuzz cases, 10^6 filter steps
 #   make install PREFIX=/opt/x   shared + static library, header, pkg-config file
 #   make header                  regenerate include/bingham.h from src/ffi/ (commit the result)
 #
@@ -31,7 +34,7 @@ PC_INCLUDEDIR := $(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))
 STATIC_LIBS := -lpthread -ldl -lm
 
 .PHONY: build header demo test deps fmt-check clippy rust-test python-test install install-test \
-        uninstall clean
+        uninstall clean sanitize valgrind fuzz long
 
 build:
 	$(CARGO) build --release --lib
@@ -62,7 +65,7 @@ demo: build
 
 # --- tests ---------------------------------------------------------------------------------
 
-test: deps fmt-check clippy build rust-test python-test install-test
+test: deps fmt-check clippy build rust-test python-test install-test sanitize
 	@echo "make test: all passed"
 
 # Installs what the tests need when it is missing (Debian/Ubuntu): a C++ compiler, Eigen,
@@ -86,6 +89,30 @@ python-test: build
 # Installs into a temporary prefix and builds/runs a C++11 program against it via pkg-config.
 install-test: build
 	MAKE="$(MAKE)" CXX="$(CXX)" CC="$(CC)" scripts/install-test.sh
+
+# --- reliability ---------------------------------------------------------------------------
+
+# The C/C++ tests and examples built with -fsanitize=address,undefined against libbingham.a and
+# run with leak detection; fails if ASan is not really linked (about 2 min on 2 cores).
+sanitize: build
+	CARGO="$(CARGO)" CC="$(CC)" CXX="$(CXX)" scripts/sanitize.sh
+
+# The same programs, and tests/fuzz_ffi.rs with exactly-sized buffers, under valgrind memcheck
+# (about 15 min on 2 cores; installs valgrind when missing).
+valgrind: build
+	CARGO="$(CARGO)" CC="$(CC)" CXX="$(CXX)" scripts/valgrind.sh
+
+FUZZ_CASES ?= 10000000
+LONG_STEPS ?= 1000000
+
+# Long runs: the C ABI fuzz harness with FUZZ_CASES cases (seed: BINGHAM_FUZZ_SEED, default 0)
+# and the filter's long runs with LONG_STEPS steps per scenario (`cargo test` runs 250000 cases
+# and 10^4 steps).
+fuzz: long
+	BINGHAM_FUZZ_CASES=$(FUZZ_CASES) BINGHAM_FUZZ_STATS=1 $(CARGO) test --release --test fuzz_ffi -- --nocapture
+
+long:
+	BINGHAM_LONG_STEPS=$(LONG_STEPS) $(CARGO) test --release --test long_run -- --nocapture --test-threads=1
 
 # --- install -------------------------------------------------------------------------------
 
