@@ -1077,9 +1077,10 @@ fn check_hess(c: &Case, o: &[Option<Vec<f64>>]) -> Result<(), String> {
     }
     let h = o[2].as_ref().unwrap();
     for i in 0..d {
-        // variances of x_i² ≥ 0; the diagonal bounds the row (Cauchy–Schwarz)
+        // variances of x_i² ≥ 0 up to rounding (-1e-15; -1e-12 for concentrations beyond
+        // 1e300, where d = 4 loses digits, e.g. -1.9e-14 at z = (−MAX, −MAX, −3.6e6, 0))
         let hii = h[i * d + i];
-        if hii < -1e-15 {
+        if hii < -omega_tol(c) * 1e-3 {
             return Err(format!("Hessian diagonal [{i}] = {hii:e} < 0"));
         }
         let scale = (0..d).map(|j| h[i * d + j].abs()).fold(0.0, f64::max);
