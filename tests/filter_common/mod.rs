@@ -119,9 +119,17 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 /// The axial angular error `min(∠(a, b), π − ∠(a, b))` (JAIF eq. 67–68).
 pub fn axial_error(a: &[f64], b: &[f64]) -> f64 {
-    let c = (dot(a, b) / (dot(a, a) * dot(b, b)).sqrt()).clamp(-1.0, 1.0);
-    let ang = c.acos();
-    ang.min(std::f64::consts::PI - ang)
+    // 2 atan2(|â − s b̂|, |â + s b̂|) with s = sign(a·b): accurate for tiny angles, where
+    // acos(a·b) has a floor of √ε ≈ 1.5e-8.
+    let (na, nb) = (dot(a, a).sqrt(), dot(b, b).sqrt());
+    let s = if dot(a, b) < 0.0 { -1.0 } else { 1.0 };
+    let (mut diff, mut sum) = (0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        let (u, v) = (x / na, s * y / nb);
+        diff += (u - v) * (u - v);
+        sum += (u + v) * (u + v);
+    }
+    2.0 * diff.sqrt().atan2(sum.sqrt())
 }
 
 pub fn rmse(errors: &[f64]) -> f64 {
