@@ -10,6 +10,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::distribution::{sym_eigen_ascending, unit_vector, Bingham};
 use crate::error::{check_dim, check_finite, Error, Result, MAX_DIM};
+use crate::normalization::d2::omega1_with_slope;
 use crate::normalization::{log_normalization_into, Method};
 
 /// Smallest accepted eigenvalue of the trace-normalized second moment. Below it the moment
@@ -407,18 +408,13 @@ pub(crate) fn initial_guess(t: &[f64], z: &mut [f64]) {
 /// `1/(2(1−r)) − 1/(2r)` is already within a factor of two.
 fn pair_inverse(r: f64) -> f64 {
     let mut x = (0.5 / (1.0 - r) - 0.5 / r).min(0.0);
-    let mut g = [0.0; 2];
-    let mut h = [0.0; 4];
     for _ in 0..20 {
-        if log_normalization_into(&[x, 0.0], Method::Exact, Some(&mut g), Some(&mut h)).is_err() {
-            break;
-        }
-        let w = g[0];
-        if ((w - r) / r).abs() <= 1e-12 || h[0].is_nan() || h[0] <= 0.0 {
+        let (w, h) = omega1_with_slope(x);
+        if ((w - r) / r).abs() <= 1e-12 || h.is_nan() || h <= 0.0 {
             break;
         }
         // Newton on 1/ω − 1/r (nearly linear in x): Δ = ω²(1/ω − 1/r)/H11
-        let step = w * w * (1.0 / w - 1.0 / r) / h[0];
+        let step = w * w * (1.0 / w - 1.0 / r) / h;
         let next = (x + step).min(0.0);
         if !next.is_finite() {
             break;

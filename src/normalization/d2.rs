@@ -38,3 +38,13 @@ pub(crate) fn log_f_sorted(
     }
     Ok(log_f)
 }
+
+/// `ω1` and `∂ω1/∂z1 = Var(x1²)` of `z = [z1, 0]`, `z1 ≤ 0` (the same formulas as
+/// [`log_f_sorted`], without its output slices; the MLE's start solves many d = 2 problems).
+#[inline]
+pub(crate) fn omega1_with_slope(z1: f64) -> (f64, f64) {
+    let x = -0.5 * z1;
+    let (i0, _, dm) = i01e(x);
+    let w1 = dm / (2.0 * i0);
+    (w1, bessel_q(x) / (8.0 * i0) - w1 * w1)
+}

@@ -6,7 +6,7 @@
 //! The gradient of `log F` is `ω_i = ∂ log F / ∂z_i = E[x_i²]` (so `Σ ω_i = 1`), the Hessian of
 //! `log F` is `∂ω_i/∂z_j = Cov(x_i², x_j²)`.
 
-mod d2;
+pub(crate) mod d2;
 mod gauss;
 mod general;
 mod quad;
