@@ -1225,8 +1225,13 @@ fn total_cases() -> u64 {
     env_count("BINGHAM_FUZZ_CASES", 250_000)
 }
 
+/// The base seed, XOR-ed into every case's seed. A seed other than 0 is scrambled first: XOR-ing
+/// a small number into the case index would only reorder the cases of seed 0.
 fn base_seed() -> u64 {
-    env_count("BINGHAM_FUZZ_SEED", 0)
+    match env_count("BINGHAM_FUZZ_SEED", 0) {
+        0 => 0,
+        s => mix(s),
+    }
 }
 
 fn stats_wanted() -> bool {
