@@ -12,6 +12,8 @@
 //! * the high-precision files `tests/data/normalization_d{5..8}.csv`, when present;
 //! * identities: `Σ ω = 1`, permutation and shift invariance, symmetric Hessian with zero row sums.
 
+mod common;
+
 use bingham::normalization::{evaluate, log_normalization_into, Method};
 use std::f64::consts::PI;
 
@@ -351,74 +353,21 @@ fn omega_sums_to_one_and_invariances() {
     }
 }
 
-/// A reference row: `(z, log F, ω, H)` (`H` row-major, empty if the file has none).
-type Row = (Vec<f64>, f64, Vec<f64>, Vec<f64>);
-
-/// Rows `(z, log F, ω)` of `tests/data/normalization_d{d}.csv` (header
-/// `d,z1..zd,logF,omega1..omegad[,H..]`), if the file exists.
-fn read_reference(d: usize) -> Option<Vec<Row>> {
-    let path = format!(
-        "{}/tests/data/normalization_d{d}.csv",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let text = std::fs::read_to_string(path).ok()?;
-    let mut lines = text
-        .lines()
-        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'));
-    let header: Vec<String> = lines
-        .next()?
-        .split(',')
-        .map(|s| s.trim().to_string())
-        .collect();
-    let col = |name: &str| header.iter().position(|h| h == name);
-    let zc: Vec<usize> = (1..=d)
-        .map(|i| col(&format!("z{i}")))
-        .collect::<Option<_>>()?;
-    let wc: Vec<usize> = (1..=d)
-        .map(|i| col(&format!("omega{i}")))
-        .collect::<Option<_>>()?;
-    let lc = col("logF")?;
-    let hc: Option<Vec<usize>> = (0..d * d)
-        .map(|k| col(&format!("H{}{}", k / d + 1, k % d + 1)))
-        .collect();
-    Some(
-        lines
-            .map(|line| {
-                let f: Vec<f64> = line
-                    .split(',')
-                    .map(|s| s.trim().parse().expect("number"))
-                    .collect();
-                (
-                    zc.iter().map(|&c| f[c]).collect(),
-                    f[lc],
-                    wc.iter().map(|&c| f[c]).collect(),
-                    hc.as_ref()
-                        .map(|h| h.iter().map(|&c| f[c]).collect())
-                        .unwrap_or_default(),
-                )
-            })
-            .collect(),
-    )
-}
-
 #[test]
 fn high_precision_reference_files_d5_to_d8() {
     for d in 5..=8 {
-        let Some(rows) = read_reference(d) else {
-            println!("tests/data/normalization_d{d}.csv not present: skipped");
-            continue;
-        };
+        let rows = common::read_reference(d);
         let (mut ef, mut ew, mut eh) = (0.0f64, 0.0f64, 0.0f64);
-        for (z, lf, om, hr) in &rows {
-            let e = evaluate(z, Method::Exact, !hr.is_empty()).unwrap();
-            ef = ef.max((e.log_f - lf).abs());
-            for (a, b) in e.grad.iter().zip(om) {
+        for r in &rows {
+            let e = evaluate(&r.z, Method::Exact, !r.hess.is_empty()).unwrap();
+            ef = ef.max((e.log_f - r.log_f).abs());
+            for (a, b) in e.grad.iter().zip(&r.omega) {
                 ew = ew.max(rel(*a, *b));
             }
-            for (k, (got, want)) in e.hess.iter().zip(hr).enumerate() {
+            for (k, (got, want)) in e.hess.iter().zip(&r.hess).enumerate() {
                 // Relative to the natural scale √(H_ii H_jj) ≥ |H_ij|.
                 let (i, j) = (k / d, k % d);
-                let scale = (hr[i * d + i] * hr[j * d + j]).sqrt();
+                let scale = (r.hess[i * d + i] * r.hess[j * d + j]).sqrt();
                 eh = eh.max((got - want).abs() / scale);
             }
         }

@@ -111,6 +111,11 @@
 
 use crate::error::{Error, Result};
 use std::f64::consts::PI;
+
+/// The integration tests' reference-file reader (`tests/data/normalization_d*.csv`), shared.
+#[cfg(test)]
+#[path = "../../tests/common/mod.rs"]
+mod test_common;
 use std::ops::{Add, Mul, Sub};
 
 /// A minimal complex number (only what the contour needs).
@@ -1235,61 +1240,13 @@ mod tests {
         }
     }
 
-    /// A reference row: `(z, log F, ω, H)` (`H` row-major, empty if the file has none).
-    type Row = (Vec<f64>, f64, Vec<f64>, Vec<f64>);
-
-    fn read_reference(d: usize) -> Option<Vec<Row>> {
-        let path = format!(
-            "{}/tests/data/normalization_d{d}.csv",
-            env!("CARGO_MANIFEST_DIR")
-        );
-        let text = std::fs::read_to_string(path).ok()?;
-        let mut lines = text
-            .lines()
-            .filter(|l| !l.trim().is_empty() && !l.starts_with('#'));
-        let header: Vec<String> = lines
-            .next()?
-            .split(',')
-            .map(|s| s.trim().to_string())
-            .collect();
-        let col = |name: &str| header.iter().position(|h| h == name);
-        let zc: Vec<usize> = (1..=d)
-            .map(|i| col(&format!("z{i}")))
-            .collect::<Option<_>>()?;
-        let wc: Vec<usize> = (1..=d)
-            .map(|i| col(&format!("omega{i}")))
-            .collect::<Option<_>>()?;
-        let lc = col("logF")?;
-        let hc: Option<Vec<usize>> = (0..d * d)
-            .map(|k| col(&format!("H{}{}", k / d + 1, k % d + 1)))
-            .collect();
-        let mut rows = Vec::new();
-        for line in lines {
-            let f: Vec<f64> = line
-                .split(',')
-                .map(|s| s.trim().parse().unwrap_or(f64::NAN))
-                .collect();
-            rows.push((
-                zc.iter().map(|&c| f[c]).collect(),
-                f[lc],
-                wc.iter().map(|&c| f[c]).collect(),
-                hc.as_ref()
-                    .map(|h| h.iter().map(|&c| f[c]).collect())
-                    .unwrap_or_default(),
-            ));
-        }
-        Some(rows)
-    }
-
     #[test]
-    fn against_high_precision_reference_files_if_present() {
+    fn against_high_precision_reference_files() {
         for d in 2..=8 {
-            let Some(rows) = read_reference(d) else {
-                println!("tests/data/normalization_d{d}.csv not present: skipped");
-                continue;
-            };
+            let rows = super::test_common::read_reference(d);
             let (mut ef, mut ew, mut eh) = (0.0f64, 0.0f64, 0.0f64);
-            for (z, lf, om, hr) in &rows {
+            for row in &rows {
+                let (z, lf, om, hr) = (&row.z, &row.log_f, &row.omega, &row.hess);
                 let mut idx: Vec<usize> = (0..d).collect();
                 idx.sort_by(|&a, &b| z[a].total_cmp(&z[b]));
                 let zs: Vec<f64> = idx.iter().map(|&a| z[a]).collect();
