@@ -16,7 +16,7 @@
 // - invariants: a measurement at the mode with aligned noise adds the concentrations and keeps
 //   the mode; identity-mode isotropic noise keeps M and lowers |z|.
 //
-// Concentrations |z| <= 25, where the quadrature (as in reference_eigen.cpp: trapezoid rule for
+// Concentrations |z| <= 25, where the quadrature (sphere_quadrature.hpp: trapezoid rule for
 // d = 2; Gauss-Legendre x Gauss-Legendre x trapezoid in hyperspherical coordinates for d = 4) is
 // accurate to ~1e-12.
 #include <Eigen/Dense>
@@ -28,72 +28,15 @@
 #include <vector>
 
 #include "check.h"
+#include "sphere_quadrature.hpp"
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 typedef Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> RowMatrix;
 
-static const double PI = 3.14159265358979323846;
-
-// ---- quadrature on S^1 and S^3 --------------------------------------------------------------
-
-struct Node {
-    VectorXd x;
-    double w;
-};
-
-static void gauss_legendre(int n, double a, double b, std::vector<double> &t, std::vector<double> &w) {
-    t.assign(n, 0.0);
-    w.assign(n, 0.0);
-    for (int i = 0; i < n; ++i) {
-        double x = std::cos(PI * (i + 0.75) / (n + 0.5)), dp = 0;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1, p1 = x;
-            for (int k = 2; k <= n; ++k) {
-                double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (x * p1 - p0) / (x * x - 1);
-            double dx = p1 / dp;
-            x -= dx;
-            if (std::fabs(dx) < 1e-16) break;
-        }
-        t[i] = 0.5 * (a + b) + 0.5 * (b - a) * x;
-        w[i] = (b - a) / ((1 - x * x) * dp * dp);
-    }
-}
-
-static std::vector<Node> make_nodes(int d) {
-    std::vector<Node> nodes;
-    if (d == 2) {
-        int n = 512;
-        for (int k = 0; k < n; ++k) {
-            double p = 2 * PI * k / n;
-            VectorXd x(2);
-            x << std::cos(p), std::sin(p);
-            nodes.push_back(Node{x, 2 * PI / n});
-        }
-        return nodes;
-    }
-    int n = 80, nphi = 160;
-    std::vector<double> t, w;
-    gauss_legendre(n, 0, PI, t, w);
-    double h = 2 * PI / nphi;
-    for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j)
-            for (int k = 0; k < nphi; ++k) {
-                double ps = t[i], th = t[j], p = k * h;
-                VectorXd x(4);
-                x << std::cos(ps), std::sin(ps) * std::cos(th), std::sin(ps) * std::sin(th) * std::cos(p),
-                    std::sin(ps) * std::sin(th) * std::sin(p);
-                nodes.push_back(Node{x, w[i] * w[j] * std::sin(ps) * std::sin(ps) * std::sin(th) * h});
-            }
-    return nodes;
-}
-
 static const std::vector<Node> &nodes(int d) {
-    static std::vector<Node> n2 = make_nodes(2), n4 = make_nodes(4);
+    // 512 points on S^1; 80 x 80 x 160 on S^3
+    static std::vector<Node> n2 = sphere_nodes(2, 128), n4 = sphere_nodes(4, 80);
     return d == 2 ? n2 : n4;
 }
 
