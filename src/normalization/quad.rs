@@ -20,7 +20,7 @@
 //! geometrically from the smallest feature scale. The exponential factor `e^{u z}` is cut where
 //! it drops below `e^{−50}` (a relative truncation error below 1e-18, see `Layout::trunc`). The rule's
 //! error is measured against a 65-digit reference (`tests/data`, 272 points with |z| up to 1e6):
-//! `|Δ log F| ≤ 1.8e-15` and relative `Δω_i ≤ 3.7e-15`. Hessian entries are accurate to about
+//! `|Δ log F| ≤ 1.8e-15` and relative `Δω_i ≤ 3.2e-15`. Hessian entries are accurate to about
 //! 1e-9 relative to the scale of their row: a covariance `E[x_i² x_j²] − ω_i ω_j` of nearly
 //! independent coordinates cancels digits. The MLE's accuracy depends on `ω` only; the Hessian
 //! only steers its Newton steps.
