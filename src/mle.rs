@@ -42,20 +42,26 @@ pub fn mle_from_second_moment(s: &DMatrix<f64>) -> Result<Bingham> {
             "second moment must have a positive trace, got {tr}"
         )));
     }
-    let sn = s / tr;
-    let asym = (&sn - sn.transpose()).amax();
+    let mut asym = 0.0f64;
+    for i in 0..d {
+        for j in i + 1..d {
+            asym = asym.max((s[(i, j)] - s[(j, i)]).abs() / tr);
+        }
+    }
     if asym > 1e-10 {
         return Err(Error::InvalidArgument(format!(
             "second moment is not symmetric: max |S − Sᵀ|/tr S = {asym:e}"
         )));
     }
-    let sym = (&sn + sn.transpose()) * 0.5;
-    // d = 2, 4: the same algorithm on stack arrays (the filter's allocation-free path).
+    // d = 2, 4: the same algorithm on stack arrays (the filter's allocation-free path), which
+    // normalizes by the trace and symmetrizes itself.
     match d {
-        2 => return fixed_mle::<2>(&sym),
-        4 => return fixed_mle::<4>(&sym),
+        2 => return fixed_mle::<2>(s),
+        4 => return fixed_mle::<4>(s),
         _ => {}
     }
+    let sn = s / tr;
+    let sym = (&sn + sn.transpose()) * 0.5;
     let (m, w) = sym_eigen_ascending(sym)?;
     if w[0] < OMEGA_MIN {
         return Err(Error::InvalidArgument(format!(
