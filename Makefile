@@ -1,6 +1,7 @@
 # bingham -- build, demo, test and install.
 #
 #   make demo                    build the library, then build and run the C/C++ examples
+#   make broad                   the AHRS vs VQF/Madgwick/Mahony on the BROAD trials (BROAD_DIR)
 #   make test                    everything CI runs (installs missing tools first, see `deps`)
 #   make sanitize                C/C++ tests and examples under ASan + UBSan + LSan (in `test`)
 #   make valgrind                the same programs and the C ABI fuzz harness under valgrind
@@ -33,7 +34,7 @@ PC_INCLUDEDIR := $(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))
 # what a program linking libbingham.a needs besides the archive (Rust's standard library)
 STATIC_LIBS := -lpthread -ldl -lm
 
-.PHONY: build header demo test deps fmt-check clippy rust-test python-test install install-test \
+.PHONY: build header demo broad test deps fmt-check clippy rust-test python-test install install-test \
         uninstall clean sanitize valgrind fuzz long
 
 build:
@@ -62,6 +63,14 @@ demo: build
 	@if $(PYTHON) -c 'import numpy' 2>/dev/null; then \
 	  BINGHAM_LIB=$(abspath $(RELEASE))/libbingham.so $(PYTHON) examples/python/track_quaternion.py 20; \
 	else echo "(skipped: NumPy is not installed; \`make deps\` installs it)"; fi
+
+# Orientation accuracy on real IMU data (BROAD, CC BY 4.0): our AHRS against VQF, Madgwick and
+# Mahony (the peers need the Python packages vqf and ahrs: `make deps`); plot of trial 07.
+BROAD_DIR ?= ../shared/data/broad
+
+broad: build
+	BINGHAM_LIB=$(abspath $(RELEASE))/libbingham.so $(PYTHON) examples/python/broad.py $(BROAD_DIR) \
+	  --plot $(TARGET_DIR)/broad_trial07.svg
 
 # --- tests ---------------------------------------------------------------------------------
 

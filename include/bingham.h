@@ -137,6 +137,27 @@ typedef enum bingham_status {
 } bingham_status;
 
 /**
+ * An attitude and heading reference system on the recursive Bingham filter: gyroscope
+ * propagation, accelerometer and magnetometer as exact Bayes updates of a Bingham distribution
+ * of the orientation, with gyroscope-bias estimation, linear-acceleration and
+ * magnetic-disturbance rejection. Opaque: create it with `bingham_ahrs_new()`, release it with
+ * `bingham_ahrs_free()`; the caller owns it.
+ *
+ * Conventions: the orientation q = (w, x, y, z) (scalar first) maps the sensor frame to the
+ * world frame ENU (x east, y magnetic north, z up): `v_world = q v_sensor q*`. Units: gyroscope
+ * rad/s, accelerometer m/s² (specific force, +g up at rest), magnetometer any consistent unit.
+ *
+ * The first sample initializes the state (tilt from the accelerometer, heading from the
+ * magnetometer; without a magnetometer the heading stays uniform, honestly unknown, and
+ * `bingham_ahrs_quaternion()` returns one of the equally likely orientations).
+ *
+ * Thread safety: one thread at a time per handle (functions taking `const bingham_ahrs *` may
+ * run concurrently with each other); different handles are independent. Memory: no heap
+ * allocation per sample.
+ */
+typedef struct bingham_ahrs bingham_ahrs;
+
+/**
  * A recursive Bingham filter for axes in the plane (d = 2) or orientations in space (d = 4,
  * unit quaternions, scalar first), after Kurz, Gilitschenski, Julier & Hanebeck (JAIF 2014).
  *
@@ -159,6 +180,96 @@ typedef enum bingham_status {
  * exact bit patterns), so passing the same noise arrays every step costs nothing extra.
  */
 typedef struct bingham_filter bingham_filter;
+
+/**
+ * Parameters of the AHRS (`bingham_ahrs_new()`). Fill it with `bingham_ahrs_params_default()`
+ * (the defaults are the tuned set: one parameter set for all recordings, tuned on the BROAD
+ * benchmark), then change fields if needed. All angles in radians, times in seconds.
+ */
+typedef struct bingham_ahrs_params {
+    /**
+     * Sampling period in seconds (> 0).
+     */
+    double sample_time;
+    /**
+     * Orientation process noise in rad/√s: the prediction adds isotropic rotation noise with
+     * standard deviation `gyro_noise·√sample_time` per step (gyroscope noise, bias drift and
+     * model error together).
+     */
+    double gyro_noise;
+    /**
+     * Angular standard deviation (rad) of one accelerometer direction sample as a measurement
+     * of "up" (`κ = 1/acc_noise²`).
+     */
+    double acc_noise;
+    /**
+     * Linear-acceleration rejection scale in m/s²: `κ` is divided by
+     * `1 + ((|ā| − gravity)/acc_reject)²`, `ā` the low-passed accelerometer.
+     */
+    double acc_reject;
+    /**
+     * Time constant (s) of the accelerometer's low-pass filter in the gyroscope-integrated
+     * (quasi-inertial) frame: linear accelerations average out there, gravity does not.
+     */
+    double acc_tau;
+    /**
+     * Time constant (s) of the magnetometer's low-pass filter in the same frame.
+     */
+    double mag_tau;
+    /**
+     * Magnitude of gravity in m/s².
+     */
+    double gravity;
+    /**
+     * Angular standard deviation (rad) of one magnetometer heading sample (`κ = 1/mag_noise²`).
+     */
+    double mag_noise;
+    /**
+     * Relative tolerance on the magnetic field's norm before a sample counts as disturbed.
+     */
+    double mag_norm_tol;
+    /**
+     * Tolerance (rad) on the field's dip angle before a sample counts as disturbed.
+     */
+    double mag_dip_tol;
+    /**
+     * Time constant (s) with which the reference norm and dip follow undisturbed samples.
+     */
+    double mag_ref_time;
+    /**
+     * A disturbance whose norm and dip stay steady this long (s) becomes the new reference.
+     */
+    double mag_new_time;
+    /**
+     * Time constant (s) of the gyroscope-bias estimation from the observations' corrections
+     * during motion (`0` disables it).
+     */
+    double bias_time;
+    /**
+     * Largest gyroscope bias (rad/s) per axis the estimate may reach.
+     */
+    double bias_max;
+    /**
+     * Time (s) the sensor must be still before the bias is taken from the gyroscope.
+     */
+    double rest_time;
+    /**
+     * Rest threshold on the gyroscope's deviation from its low-pass value (rad/s).
+     */
+    double rest_gyro;
+    /**
+     * Rest threshold on the accelerometer's deviation from its low-pass value (m/s²).
+     */
+    double rest_acc;
+    /**
+     * Time constant (s) of the bias estimate while at rest.
+     */
+    double rest_bias_time;
+    /**
+     * Angular standard deviation (rad) of the initial tilt and heading.
+     */
+    double init_std;
+} bingham_ahrs_params;
 
 #ifdef __cplusplus
 extern "C" {
@@ -576,6 +687,87 @@ enum bingham_status bingham_rotate_right(size_t d,
 enum bingham_status bingham_mode(size_t d, const double *m, const double *z, double *mode);
 
 /**
+ * The likelihood of a measured direction as a Bingham distribution of the orientation (d = 4).
+ *
+ * A sensor measures the unit direction `body` (sensor frame) of the known unit direction
+ * `reference` (world frame), with von Mises–Fisher noise of concentration `kappa` (for small
+ * noise, `kappa ≈ 1/σ²` with σ the angular standard deviation in radians) on the measured
+ * direction. Orientation convention: the unit quaternion q (scalar first) maps sensor to world,
+ * `v_world = q v_sensor q*`, rotation matrix `R(q)`. The likelihood
+ * `p(b | q) ∝ exp(kappa rᵀ R(q) b) = exp(qᵀ (kappa K) q)` is a Bingham density in q, with K
+ * Davenport's 4×4 matrix of the pair (symmetric, traceless, eigenvalues −1, −1, 1, 1).
+ *
+ * - `body`, `reference`: 3 doubles each, unit norm within `BINGHAM_UNIT_TOL` (then normalized).
+ * - `kappa`: finite, ≥ 0 (0 gives the uniform distribution).
+ * - `m`: receives the 4×4 row-major M (the eigenvectors of K; the last two columns span the
+ *   rotations that map `body` onto `reference`); `z`: receives `(−2 kappa, −2 kappa, 0, 0)`.
+ *   The rotation about `reference` is not observed: the distribution is flat along it.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT`, `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, non-unit
+ * vector, `kappa` negative or not finite). On error nothing is written.
+ *
+ * # Safety
+ * `body`, `reference`: 3 readable doubles each; `m`: 16 and `z`: 4 writable doubles.
+ */
+enum bingham_status bingham_vector_observation(const double *body,
+                                               const double *reference,
+                                               double kappa,
+                                               double *m,
+                                               double *z);
+
+/**
+ * Isotropic rotation noise with angular standard deviation `sigma` (radians) as a Bingham
+ * distribution with its mode at the identity: the distribution to pass as process noise
+ * (`m_w`, `z_w`) or measurement noise.
+ *
+ * - d = 4: the rotation by a Gaussian rotation vector with standard deviation `sigma` per axis,
+ *   as a quaternion (scalar first); d = 2: the unit complex number `(cos a, sin a)` with a
+ *   Gaussian angle a of standard deviation `sigma`.
+ * - The result has exactly that distribution's second moment (closed form; for d = 4
+ *   `E[cos θ] = (1 − σ²) exp(−σ²/2)` of the rotation angle θ) and is its moment-matched
+ *   (maximum-likelihood) Bingham fit. For small sigma, z ≈ −2/σ² (d = 4), −1/(2σ²) (d = 2).
+ * - `m`: receives d×d row-major M, last column the identity `(1, 0, …)`; `z`: d concentrations,
+ *   ascending, `z[d-1] = 0`.
+ *
+ * Errors: `BINGHAM_ERR_INVALID_DIMENSION` (d not 2 or 4), `BINGHAM_ERR_NULL_ARGUMENT`,
+ * `BINGHAM_ERR_INVALID_ARGUMENT` (`sigma` ≤ 0, not finite, or below about 6e-7 rad, where the
+ * concentration leaves the MLE's range). On error nothing is written.
+ *
+ * # Safety
+ * `m`: d*d and `z`: d writable doubles.
+ */
+enum bingham_status bingham_noise_from_angle_std(size_t d,
+                                                 double sigma,
+                                                 double *m,
+                                                 double *z);
+
+/**
+ * The angular spread (radians) of a Bingham distribution of axes (d = 2) or rotations (d = 4,
+ * quaternions): an uncertainty readout with an exact meaning.
+ *
+ * With ω the moments (`ω_i = E[(m_iᵀ x)²]`, m_i column i of M after normalization, ascending)
+ * and k = 2 for d = 4, k = 1 for d = 2:
+ * - `spread[i]`, i < d − 1: `k sqrt(ω_i)`, the spread along principal direction i (for d = 4:
+ *   the RMS of the rotation's component about the axis of column i, in the `2 sin(θ/2)` sense);
+ * - `spread[d-1]`: the total, `k sqrt(1 − ω_{d-1})`. For d = 4 this is exactly the RMS of
+ *   `2 sin(θ/2)`, θ the rotation angle between x and the mode; for d = 2 the RMS of `sin α`,
+ *   α the angle between the axes. To second order both are the RMS angle (a distribution with
+ *   RMS angle 5° reads 5°). The squares of the per-axis values add up to the total's square.
+ *
+ * - `m`, `z`: the distribution (as everywhere); `spread`: receives d doubles.
+ *
+ * Errors: `BINGHAM_ERR_INVALID_DIMENSION` (d not 2 or 4), `BINGHAM_ERR_NULL_ARGUMENT`,
+ * `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, M not orthogonal). On error nothing is written.
+ *
+ * # Safety
+ * `m`: d*d and `z`: d readable doubles; `spread`: d writable doubles.
+ */
+enum bingham_status bingham_angular_spread(size_t d,
+                                           const double *m,
+                                           const double *z,
+                                           double *spread);
+
+/**
  * Creates a filter with the initial estimate `Bingham(m0, z0)`.
  *
  * - `d`: 2 (axes: complex numbers `(re, im)`) or 4 (unit quaternions, scalar first
@@ -767,6 +959,214 @@ enum bingham_status bingham_filter_log_likelihood(const struct bingham_filter *f
                                                   const double *m_v,
                                                   const double *z_v,
                                                   double *out);
+
+/**
+ * Measurement update with a measured direction (d = 4 filters): `body` (sensor frame) is a
+ * noisy measurement of the known world direction `reference`, with von Mises–Fisher noise of
+ * concentration `kappa` (see `bingham_vector_observation()`; the filter's quaternion maps
+ * sensor to world). The likelihood is a Bingham density of the orientation, so the update is
+ * an exact Bayes product (equal to `bingham_multiply()` of the state with
+ * `bingham_vector_observation()`); the rotation about `reference` is not observed.
+ *
+ * - `body`, `reference`: 3 doubles each, unit within `BINGHAM_UNIT_TOL`; `kappa`: finite, ≥ 0.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT`, `BINGHAM_ERR_INVALID_DIMENSION` (a d = 2 filter),
+ * `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, non-unit vector, bad `kappa`),
+ * `BINGHAM_ERR_NUMERICAL` (overflow). On error the filter is unchanged.
+ *
+ * # Safety
+ * `f`: a live handle; `body`, `reference`: 3 readable doubles each.
+ */
+enum bingham_status bingham_filter_update_vector(struct bingham_filter *f,
+                                                 const double *body,
+                                                 const double *reference,
+                                                 double kappa);
+
+/**
+ * The natural logarithm of the predictive density of a measured direction under the current
+ * state (d = 4): `log ∫ f_state(q) p(body | q) dq`, with `p(b | q)` the von Mises–Fisher
+ * density `kappa / (4π sinh kappa) exp(kappa rᵀ R(q) b)` on the unit sphere of directions
+ * (surface measure). Exact. For gating (an outlier has a low value) and adaptive `kappa`. The
+ * filter is not changed.
+ *
+ * - `body`, `reference`, `kappa`: as in `bingham_filter_update_vector()`; `out`: receives the
+ *   value.
+ *
+ * Errors: as `bingham_filter_update_vector()`, plus `BINGHAM_ERR_NULL_ARGUMENT` (`out`). On
+ * error `*out` is not written.
+ *
+ * # Safety
+ * `f`: a live handle; `body`, `reference`: 3 readable doubles each; `out`: one writable double.
+ */
+enum bingham_status bingham_filter_log_likelihood_vector(const struct bingham_filter *f,
+                                                         const double *body,
+                                                         const double *reference,
+                                                         double kappa,
+                                                         double *out);
+
+/**
+ * The angular spread (radians) of the filter's state, as `bingham_angular_spread()`:
+ * `spread[i]` (i < d − 1) along principal direction i (column i of the state's M),
+ * `spread[d-1]` the total (d = 4: the RMS of `2 sin(θ/2)`, θ the rotation angle from the mode,
+ * ≈ the RMS angle).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `spread`). On error nothing is written.
+ *
+ * # Safety
+ * `f`: a live handle; `spread`: d writable doubles.
+ */
+enum bingham_status bingham_filter_angular_spread(const struct bingham_filter *f, double *spread);
+
+/**
+ * Fills `p` with the default parameters for the sampling period `sample_time` (seconds, > 0).
+ * The defaults are the tuned set.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`), `BINGHAM_ERR_INVALID_ARGUMENT` (`sample_time` not
+ * finite or ≤ 0). On error `*p` is not written.
+ *
+ * # Safety
+ * `p`: a writable `bingham_ahrs_params`.
+ */
+enum bingham_status bingham_ahrs_params_default(double sample_time, struct bingham_ahrs_params *p);
+
+/**
+ * Creates an AHRS with the parameters `p` (validated: every field finite, periods, noises and
+ * thresholds > 0, `bias_time` ≥ 0).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`, `out`), `BINGHAM_ERR_INVALID_ARGUMENT` (a bad
+ * field; the message names it). On error `*out` is not written.
+ *
+ * # Safety
+ * `p`: a readable `bingham_ahrs_params`; `out`: a writable `bingham_ahrs *`.
+ */
+enum bingham_status bingham_ahrs_new(const struct bingham_ahrs_params *p,
+                                     struct bingham_ahrs **out);
+
+/**
+ * Releases an AHRS. `NULL` is a no-op. The handle must not be used afterwards.
+ *
+ * # Safety
+ * `a` must be `NULL` or a live handle from this library, not freed before and not in use by
+ * another thread.
+ */
+void bingham_ahrs_free(struct bingham_ahrs *a);
+
+/**
+ * Creates an independent copy of an AHRS (state, bias, disturbance tracking).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `out`). On error `*out` is not written.
+ *
+ * # Safety
+ * `a`: a live handle; `out`: a writable `bingham_ahrs *`.
+ */
+enum bingham_status bingham_ahrs_clone(const struct bingham_ahrs *a, struct bingham_ahrs **out);
+
+/**
+ * Processes one sample.
+ *
+ * - `gyr`: angular rate, rad/s, sensor frame (3 doubles).
+ * - `acc`: specific force, m/s², sensor frame (+g up at rest). Its update is skipped (not an
+ *   error) when `|acc| < gravity/4` (free fall); the very first sample must show gravity.
+ * - `mag`: magnetic field, any consistent unit (3 doubles), or `NULL` (6-D filter: no heading
+ *   information). A zero field, a field along the vertical or a disturbed field is skipped.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `gyr`, `acc`), `BINGHAM_ERR_INVALID_ARGUMENT`
+ * (NaN/Inf in a sample; a first sample without gravity), `BINGHAM_ERR_NOT_CONVERGED` /
+ * `BINGHAM_ERR_NUMERICAL` (internal). On error the AHRS is unchanged: the sample is refused.
+ *
+ * # Safety
+ * `a`: a live handle; `gyr`, `acc`: 3 readable doubles each; `mag`: `NULL` or 3 readable
+ * doubles.
+ */
+enum bingham_status bingham_ahrs_update(struct bingham_ahrs *a,
+                                        const double *gyr,
+                                        const double *acc,
+                                        const double *mag);
+
+/**
+ * Processes `n` samples and writes the orientation after each: as `n` calls of
+ * `bingham_ahrs_update()` followed by `bingham_ahrs_quaternion()`.
+ *
+ * - `gyr`, `acc`: n×3 row-major; `mag`: n×3 row-major or `NULL`.
+ * - `quat`: n×4 row-major output (w, x, y, z per row, sensor → world ENU, w ≥ 0).
+ *
+ * A refused sample (see `bingham_ahrs_update()`) stops the batch: the samples before it are
+ * processed and their rows of `quat` written, the rest untouched; the error message names the
+ * sample's index ("sample k: ..."). `n = 0` does nothing.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT`, `BINGHAM_ERR_INVALID_DIMENSION` (n×4 overflows),
+ * those of `bingham_ahrs_update()`.
+ *
+ * # Safety
+ * `a`: a live handle; `gyr`, `acc`: n*3 readable doubles; `mag`: `NULL` or n*3 readable
+ * doubles; `quat`: n*4 writable doubles, not overlapping the inputs.
+ */
+enum bingham_status bingham_ahrs_update_batch(struct bingham_ahrs *a,
+                                              size_t n,
+                                              const double *gyr,
+                                              const double *acc,
+                                              const double *mag,
+                                              double *quat);
+
+/**
+ * As `bingham_ahrs_update_batch()`, also writing the total angular spread (radians, see
+ * `bingham_ahrs_angular_spread()`) after each sample into `spread` (n doubles, or `NULL`).
+ *
+ * # Safety
+ * As `bingham_ahrs_update_batch()`; `spread`: `NULL` or n writable doubles.
+ */
+enum bingham_status bingham_ahrs_update_batch_spread(struct bingham_ahrs *a,
+                                                     size_t n,
+                                                     const double *gyr,
+                                                     const double *acc,
+                                                     const double *mag,
+                                                     double *quat,
+                                                     double *spread);
+
+/**
+ * The current orientation estimate (the mode of the Bingham state): sensor → world (ENU),
+ * scalar first `(w, x, y, z)`, with w ≥ 0. Before the first sample: the identity.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `q`). On error nothing is written.
+ *
+ * # Safety
+ * `a`: a live handle; `q`: 4 writable doubles.
+ */
+enum bingham_status bingham_ahrs_quaternion(const struct bingham_ahrs *a, double *q);
+
+/**
+ * The Bingham state of the orientation: `m` 4×4 row-major (last column the mode), `z` 4
+ * concentrations ascending with `z[3] = 0`. Before the first sample: uniform (M = I, z = 0).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `m`, `z`). On error nothing is written.
+ *
+ * # Safety
+ * `a`: a live handle; `m`: 16 and `z`: 4 writable doubles.
+ */
+enum bingham_status bingham_ahrs_state(const struct bingham_ahrs *a, double *m, double *z);
+
+/**
+ * The angular spread of the state (radians), as `bingham_angular_spread()`: `spread[0..3]`
+ * along the principal directions (columns 0..2 of the state's M), `spread[3]` the total (the
+ * RMS of `2 sin(θ/2)`, θ the rotation angle between the truth and the estimate under the
+ * state: ≈ the RMS angular error when the filter is calibrated).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `spread`). On error nothing is written.
+ *
+ * # Safety
+ * `a`: a live handle; `spread`: 4 writable doubles.
+ */
+enum bingham_status bingham_ahrs_angular_spread(const struct bingham_ahrs *a, double *spread);
+
+/**
+ * The gyroscope bias estimate (rad/s, sensor frame), subtracted from the rates.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `bias`). On error nothing is written.
+ *
+ * # Safety
+ * `a`: a live handle; `bias`: 3 writable doubles.
+ */
+enum bingham_status bingham_ahrs_gyro_bias(const struct bingham_ahrs *a, double *bias);
 
 #ifdef __cplusplus
 }  // extern "C"

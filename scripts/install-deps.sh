@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what `make test` needs, only when it is missing (Debian/Ubuntu; run as root or with
 # sudo available): a C++ compiler, Eigen 3, pkg-config, binutils (readelf/nm), Python 3 with
-# pip, and NumPy + pytest for the Python binding's tests.
+# pip, NumPy + pytest for the Python binding's tests, and vqf + ahrs (the peer filters of
+# `make broad`, examples/python/broad.py).
 set -euo pipefail
 
 python=${PYTHON:-python3}
@@ -15,7 +16,7 @@ command -v "$cxx" >/dev/null 2>&1 || missing+=(g++)
 command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)
 command -v readelf >/dev/null 2>&1 && command -v nm >/dev/null 2>&1 || missing+=(binutils)
 command -v "$python" >/dev/null 2>&1 || missing+=(python3)
-if ! "$python" -c 'import numpy, pytest' >/dev/null 2>&1 && ! "$python" -m pip --version >/dev/null 2>&1; then
+if ! "$python" -c 'import numpy, pytest, vqf, ahrs' >/dev/null 2>&1 && ! "$python" -m pip --version >/dev/null 2>&1; then
     missing+=(python3-pip)
 fi
 if [ ${#missing[@]} -gt 0 ]; then
@@ -29,4 +30,10 @@ if ! "$python" -c 'import numpy, pytest' >/dev/null 2>&1; then
     # a distribution's own Python may refuse plain `pip install` (PEP 668)
     "$python" -m pip install numpy pytest ||
         "$python" -m pip install --break-system-packages numpy pytest
+fi
+
+if ! "$python" -c 'import numpy, vqf, ahrs' >/dev/null 2>&1; then
+    echo "install-deps: pip install numpy vqf ahrs"
+    "$python" -m pip install numpy vqf ahrs ||
+        "$python" -m pip install --break-system-packages numpy vqf ahrs
 fi

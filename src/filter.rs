@@ -197,6 +197,82 @@ impl BinghamFilter {
     pub fn log_likelihood(&self, measurement: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<f64> {
         dispatch!(&self.inner, c => c.log_likelihood(measurement, m_v, z_v))
     }
+
+    /// Measurement update (d = 4) with a measured direction: `body` (sensor frame, unit) of the
+    /// known `reference` (world frame, unit), von Mises–Fisher noise of concentration `kappa ≥ 0`
+    /// on the measured direction. The likelihood `exp(κ rᵀ R(q) b)` is the Bingham density
+    /// `exp(qᵀ κK q)` ([`crate::observation::davenport_matrix`]), so the posterior is exact; the
+    /// rotation about `reference` is not observed and stays as uncertain as it was. Equal to
+    /// [`BinghamFilter::update`]'s Bayes product with [`crate::observation::vector_observation`].
+    ///
+    /// Errors: [`Error::InvalidDimension`] (d = 2 filter, lengths not 3),
+    /// [`Error::InvalidArgument`] (NaN/Inf, not unit within `UNIT_TOL`, bad `kappa`),
+    /// [`Error::Numerical`] (overflow).
+    pub fn update_vector(&mut self, body: &[f64], reference: &[f64], kappa: f64) -> Result<()> {
+        let p = vector_exponent(body, reference, kappa)?;
+        self.core4_mut()?.update_precision(&p)
+    }
+
+    /// The natural logarithm of the predictive density of the measured direction `body` (a
+    /// density on the unit sphere S² of directions, surface measure) under the current estimate
+    /// (d = 4): `log ∫ f(q) C(κ) exp(κ rᵀ R(q) b) dq` with `C(κ) = κ / (4π sinh κ)`. Use it for
+    /// gating (an outlier has a small value) and to adapt `kappa`. The filter is not changed.
+    /// Arguments and errors as for [`BinghamFilter::update_vector`].
+    pub fn log_likelihood_vector(&self, body: &[f64], reference: &[f64], kappa: f64) -> Result<f64> {
+        let p = vector_exponent(body, reference, kappa)?;
+        let c = self.core4()?;
+        Ok(c.log_likelihood_precision(&p)? + crate::observation::log_vmf_normalizer_s2(kappa))
+    }
+
+    /// The angular spread of the estimate (radians), see [`crate::observation::spread_from_omega`]:
+    /// `out[i]` (i < d − 1) along principal direction `i` (column `i` of `M`), `out[d − 1]` the
+    /// total (for d = 4 the RMS of `2 sin(θ/2)`, θ the rotation angle from the mode; ≈ RMS θ).
+    /// Errors: `out` not of length `d` (nothing written).
+    pub fn angular_spread_into(&self, out: &mut [f64]) -> Result<()> {
+        dispatch!(&self.inner, c => c.angular_spread_into(out))
+    }
+
+    fn core4(&self) -> Result<&Core<4>> {
+        match &self.inner {
+            Inner::D4(c) => Ok(c),
+            Inner::D2(_) => Err(not_quaternion()),
+        }
+    }
+
+    fn core4_mut(&mut self) -> Result<&mut Core<4>> {
+        match &mut self.inner {
+            Inner::D4(c) => Ok(c),
+            Inner::D2(_) => Err(not_quaternion()),
+        }
+    }
+
+    /// Bayes update (d = 4) with the likelihood `exp(qᵀ P q)`, `P` symmetric (crate-internal:
+    /// the AHRS's heading observation).
+    pub(crate) fn update_exponent(&mut self, p: &Mat<4>) -> Result<()> {
+        self.core4_mut()?.update_precision(p)
+    }
+
+    /// The mode (d = 4) as an array.
+    pub(crate) fn mode4(&self) -> Result<[f64; 4]> {
+        let c = self.core4()?;
+        Ok([c.m[0][3], c.m[1][3], c.m[2][3], c.m[3][3]])
+    }
+}
+
+fn not_quaternion() -> Error {
+    Error::InvalidDimension(
+        "vector observations exist for d = 4 (quaternions, 3-D orientations); this filter has d = 2"
+            .into(),
+    )
+}
+
+/// Validates a vector observation and returns `κ K`.
+fn vector_exponent(body: &[f64], reference: &[f64], kappa: f64) -> Result<Mat<4>> {
+    use crate::observation::{check_direction, check_kappa, observation_exponent};
+    let b = check_direction("body", body)?;
+    let r = check_direction("reference", reference)?;
+    let kappa = check_kappa(kappa)?;
+    Ok(observation_exponent(&b, &r, kappa))
 }
 
 /// A validated, normalized noise distribution with the quantities the filter needs.
@@ -386,7 +462,13 @@ impl<const D: usize> Core<D> {
         let zhat = fixed::unit::<D>("measurement", measurement)?;
         let noise = self.measurement.get(Role::Measurement, m_v, z_v)?;
         let ml = Self::likelihood_m(&zhat, &noise.m);
-        let (v, l) = fixed::product_eigen(&self.m, &self.z, &ml, &noise.z)?;
+        let p = fixed::congruence(&ml, &noise.z);
+        self.update_precision(&p)
+    }
+
+    /// Bayes product with the likelihood `exp(xᵀ P x)`; the state is assigned only on success.
+    fn update_precision(&mut self, p: &Mat<D>) -> Result<()> {
+        let (v, l) = fixed::product_eigen_precision(&self.m, &self.z, p)?;
         let (m_new, z_new) = fixed::normalize(&v, &l);
         if !z_new.iter().all(|v| v.is_finite()) {
             return Err(Error::Numerical(
@@ -409,7 +491,20 @@ impl<const D: usize> Core<D> {
             }
         };
         let ml = Self::likelihood_m(&zhat, &noise.m);
-        let (_, l) = fixed::product_eigen(&self.m, &self.z, &ml, &noise.z)?;
+        let p = fixed::congruence(&ml, &noise.z);
+        let value = self.log_likelihood_precision(&p)? - noise.log_f;
+        if !value.is_finite() {
+            return Err(Error::Numerical(format!(
+                "log-likelihood is not finite ({value})"
+            )));
+        }
+        Ok(value)
+    }
+
+    /// `log ∫ f_state(x) exp(xᵀ P x) dx` (surface measure): with `λ` the largest eigenvalue of
+    /// `M Z Mᵀ + P`, `log F(eig − λ) + λ − log F(Z)`.
+    fn log_likelihood_precision(&self, p: &Mat<D>) -> Result<f64> {
+        let (_, l) = fixed::product_eigen_precision(&self.m, &self.z, p)?;
         let top = l[D - 1];
         let mut zp = [0.0; D];
         for (o, v) in zp.iter_mut().zip(l.iter()) {
@@ -424,12 +519,24 @@ impl<const D: usize> Core<D> {
         }
         let (lf_post, _) = fixed::log_f_omega(&zp)?;
         let (lf_state, _) = fixed::log_f_omega(&self.z)?;
-        let value = lf_post + top - lf_state - noise.log_f;
+        let value = lf_post + top - lf_state;
         if !value.is_finite() {
             return Err(Error::Numerical(format!(
                 "log-likelihood is not finite ({value})"
             )));
         }
         Ok(value)
+    }
+
+    fn angular_spread_into(&self, out: &mut [f64]) -> Result<()> {
+        if out.len() != D {
+            return Err(Error::InvalidDimension(format!(
+                "spread buffer must have length {D}, got {}",
+                out.len()
+            )));
+        }
+        let (_, w) = fixed::log_f_omega(&self.z)?;
+        crate::observation::spread_from_omega(&w, out);
+        Ok(())
     }
 }

@@ -513,19 +513,18 @@ pub(crate) fn mle<const D: usize>(
     Ok((mm, zz, sol))
 }
 
-/// Bayes' product of `Bingham(m1, z1)` and `Bingham(m2, z2)`: eigendecomposition of
-/// `M1 Z1 M1ᵀ + M2 Z2 M2ᵀ = V Λ Vᵀ` (ascending). Returns `(V, Λ)` unshifted, so the caller can
+/// Bayes' product of `Bingham(m1, z1)` and the density `∝ exp(xᵀ P2 x)` (`P2` symmetric: a
+/// Bingham's `M2 Z2 M2ᵀ`, or a vector observation's `κ K`): eigendecomposition of
+/// `M1 Z1 M1ᵀ + P2 = V Λ Vᵀ` (ascending). Returns `(V, Λ)` unshifted, so the caller can
 /// use `max Λ` (the log of the normalization's shift). To keep the Jacobi iteration away from
 /// overflow for huge concentrations the matrix is scaled by a power of two first (exact, and the
 /// Jacobi rotations are invariant under it).
-pub(crate) fn product_eigen<const D: usize>(
+pub(crate) fn product_eigen_precision<const D: usize>(
     m1: &Mat<D>,
     z1: &[f64; D],
-    m2: &Mat<D>,
-    z2: &[f64; D],
+    p2: &Mat<D>,
 ) -> Result<(Mat<D>, [f64; D])> {
     let p1 = congruence(m1, z1);
-    let p2 = congruence(m2, z2);
     let mut c = zeros::<D>();
     let mut big: f64 = 0.0;
     for i in 0..D {

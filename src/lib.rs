@@ -10,6 +10,7 @@
 //! adding `c·I` to `Z` does not change the distribution).
 //! Quaternions are scalar first, `(w, x, y, z)`.
 
+pub mod ahrs;
 pub mod distribution;
 pub mod error;
 pub mod ffi;
@@ -18,6 +19,7 @@ mod fixed;
 mod linalg;
 pub mod mle;
 pub mod normalization;
+pub mod observation;
 pub mod quaternion;
 mod sample;
 pub mod special;

@@ -56,6 +56,11 @@ __all__ = [
     "rotate_right",
     "mode",
     "Filter",
+    "vector_observation",
+    "noise_from_angle_std",
+    "angular_spread",
+    "AhrsParams",
+    "Ahrs",
 ]
 
 MIN_DIM = 2
@@ -130,6 +135,26 @@ _SIGNATURES = {
     "bingham_filter_predict_rotation": (_STATUS, [ctypes.c_void_p, _D, _D, _D]),
     "bingham_filter_update": (_STATUS, [ctypes.c_void_p, _D, _D, _D]),
     "bingham_filter_log_likelihood": (_STATUS, [ctypes.c_void_p, _D, _D, _D, _D]),
+    "bingham_filter_update_vector": (_STATUS, [ctypes.c_void_p, _D, _D, ctypes.c_double]),
+    "bingham_filter_log_likelihood_vector": (
+        _STATUS,
+        [ctypes.c_void_p, _D, _D, ctypes.c_double, _D],
+    ),
+    "bingham_filter_angular_spread": (_STATUS, [ctypes.c_void_p, _D]),
+    "bingham_vector_observation": (_STATUS, [_D, _D, ctypes.c_double, _D, _D]),
+    "bingham_noise_from_angle_std": (_STATUS, [_SIZE, ctypes.c_double, _D, _D]),
+    "bingham_angular_spread": (_STATUS, [_SIZE, _D, _D, _D]),
+    "bingham_ahrs_params_default": (_STATUS, [ctypes.c_double, ctypes.c_void_p]),
+    "bingham_ahrs_new": (_STATUS, [ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p)]),
+    "bingham_ahrs_free": (None, [ctypes.c_void_p]),
+    "bingham_ahrs_clone": (_STATUS, [ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p)]),
+    "bingham_ahrs_update": (_STATUS, [ctypes.c_void_p, _D, _D, _D]),
+    "bingham_ahrs_update_batch": (_STATUS, [ctypes.c_void_p, _SIZE, _D, _D, _D, _D]),
+    "bingham_ahrs_update_batch_spread": (_STATUS, [ctypes.c_void_p, _SIZE, _D, _D, _D, _D, _D]),
+    "bingham_ahrs_quaternion": (_STATUS, [ctypes.c_void_p, _D]),
+    "bingham_ahrs_state": (_STATUS, [ctypes.c_void_p, _D, _D]),
+    "bingham_ahrs_angular_spread": (_STATUS, [ctypes.c_void_p, _D]),
+    "bingham_ahrs_gyro_bias": (_STATUS, [ctypes.c_void_p, _D]),
 }
 
 
@@ -529,3 +554,202 @@ class Filter:
             lib().bingham_filter_log_likelihood(self._h(), _ptr(meas), _ptr(m_v), _ptr(z_v), _ptr(out))
         )
         return float(out[0])
+
+    def update_vector(self, body, reference, kappa):
+        """Update (d = 4) with a measured direction ``body`` (sensor frame, unit) of the known
+        ``reference`` (world frame, unit), von Mises–Fisher noise of concentration ``kappa``."""
+        b = _in(body, "body", (3,))
+        r = _in(reference, "reference", (3,))
+        _check(lib().bingham_filter_update_vector(self._h(), _ptr(b), _ptr(r), float(kappa)))
+
+    def log_likelihood_vector(self, body, reference, kappa):
+        """Log predictive density of a measured direction (d = 4; the filter is not changed)."""
+        b = _in(body, "body", (3,))
+        r = _in(reference, "reference", (3,))
+        out = np.empty(1)
+        _check(
+            lib().bingham_filter_log_likelihood_vector(
+                self._h(), _ptr(b), _ptr(r), float(kappa), _ptr(out)
+            )
+        )
+        return float(out[0])
+
+    def angular_spread(self):
+        """The state's angular spread in radians (see :func:`angular_spread`), length d."""
+        out = np.empty(self.d)
+        _check(lib().bingham_filter_angular_spread(self._h(), _ptr(out)))
+        return out
+
+
+# ---- vector observations and the AHRS ---------------------------------------------------------
+
+
+def vector_observation(body, reference, kappa):
+    """The likelihood ``exp(kappa rᵀ R(q) b)`` of a measured direction ``body`` (sensor frame)
+    of the known ``reference`` (world frame) as a Bingham distribution of the quaternion q
+    (scalar first, sensor → world): ``(m, z)``, z = (−2κ, −2κ, 0, 0)."""
+    b = _in(body, "body", (3,))
+    r = _in(reference, "reference", (3,))
+    m = np.empty((4, 4))
+    z = np.empty(4)
+    _check(lib().bingham_vector_observation(_ptr(b), _ptr(r), float(kappa), _ptr(m), _ptr(z)))
+    return m, z
+
+
+def noise_from_angle_std(d, sigma):
+    """Isotropic rotation noise with angular standard deviation ``sigma`` (radians) as
+    ``(m, z)`` with the mode at the identity (d = 4: Gaussian rotation vector; d = 2: Gaussian
+    angle), the exact moment-matched Bingham."""
+    m = np.empty((d, d))
+    z = np.empty(d)
+    _check(lib().bingham_noise_from_angle_std(d, float(sigma), _ptr(m), _ptr(z)))
+    return m, z
+
+
+def angular_spread(m, z):
+    """Angular spread in radians (d = 2, 4): entries 0..d-2 along the principal directions
+    (columns of m), entry d-1 the total (d = 4: RMS of 2 sin(θ/2), θ the rotation angle from the
+    mode, ≈ the RMS angle)."""
+    d, m, z = _dist(m, z)
+    out = np.empty(d)
+    _check(lib().bingham_angular_spread(d, _ptr(m), _ptr(z), _ptr(out)))
+    return out
+
+
+class AhrsParams(ctypes.Structure):
+    """``bingham_ahrs_params`` (all angles in radians, times in seconds); build it with
+    :meth:`default`, which gives the tuned defaults."""
+
+    _fields_ = [
+        ("sample_time", ctypes.c_double),
+        ("gyro_noise", ctypes.c_double),
+        ("acc_noise", ctypes.c_double),
+        ("acc_reject", ctypes.c_double),
+        ("acc_tau", ctypes.c_double),
+        ("mag_tau", ctypes.c_double),
+        ("gravity", ctypes.c_double),
+        ("mag_noise", ctypes.c_double),
+        ("mag_norm_tol", ctypes.c_double),
+        ("mag_dip_tol", ctypes.c_double),
+        ("mag_ref_time", ctypes.c_double),
+        ("mag_new_time", ctypes.c_double),
+        ("bias_time", ctypes.c_double),
+        ("bias_max", ctypes.c_double),
+        ("rest_time", ctypes.c_double),
+        ("rest_gyro", ctypes.c_double),
+        ("rest_acc", ctypes.c_double),
+        ("rest_bias_time", ctypes.c_double),
+        ("init_std", ctypes.c_double),
+    ]
+
+    @classmethod
+    def default(cls, sample_time):
+        p = cls()
+        _check(lib().bingham_ahrs_params_default(float(sample_time), ctypes.byref(p)))
+        return p
+
+    def as_dict(self):
+        return {name: getattr(self, name) for name, _ in self._fields_}
+
+
+def _rows3(a, name, n=None):
+    arr = _in(a, name)
+    if arr.ndim != 2 or arr.shape[1] != 3 or (n is not None and arr.shape[0] != n):
+        want = f"({n if n is not None else 'n'}, 3)"
+        raise ValueError(f"{name} must have shape {want}, got {arr.shape}")
+    return arr
+
+
+class Ahrs:
+    """The Bingham AHRS (gyroscope, accelerometer, optional magnetometer), owning a
+    ``bingham_ahrs`` handle. Orientation q (w, x, y, z) maps sensor to world ENU.
+    Units: rad/s, m/s² (+g up at rest), any magnetometer unit.
+
+    ``Ahrs(sample_time)`` uses the tuned defaults; pass ``params=`` (an :class:`AhrsParams`)
+    or keyword overrides (``Ahrs(0.01, acc_noise=0.8)``) to change them.
+    """
+
+    def __init__(self, sample_time, params=None, **overrides):
+        p = AhrsParams.default(sample_time) if params is None else params
+        for k, v in overrides.items():
+            if k not in p.as_dict():
+                raise TypeError(f"unknown AHRS parameter {k!r}")
+            setattr(p, k, float(v))
+        handle = ctypes.c_void_p()
+        _check(lib().bingham_ahrs_new(ctypes.byref(p), ctypes.byref(handle)))
+        self._handle = handle
+        self.params = p
+
+    def close(self):
+        """Releases the handle (idempotent)."""
+        if getattr(self, "_handle", None) is not None:
+            lib().bingham_ahrs_free(self._handle)
+            self._handle = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+    def _h(self):
+        if self._handle is None:
+            raise ValueError("the AHRS has been closed")
+        return self._handle
+
+    def update(self, gyr, acc, mag=None):
+        """One sample (3-vectors; ``mag`` may be None)."""
+        g = _in(gyr, "gyr", (3,))
+        a = _in(acc, "acc", (3,))
+        m = None if mag is None else _in(mag, "mag", (3,))
+        _check(lib().bingham_ahrs_update(self._h(), _ptr(g), _ptr(a), _ptr(m)))
+
+    def update_batch(self, gyr, acc, mag=None, spread=False):
+        """n samples (n×3 arrays; ``mag`` n×3 or None). Returns the n×4 quaternions after each
+        sample, or ``(quat, spread)`` with the total angular spread (radians, length n) when
+        ``spread`` is true. A refused sample raises :class:`BinghamError` (its message names the
+        sample); the samples before it have been processed."""
+        g = _rows3(gyr, "gyr")
+        n = g.shape[0]
+        a = _rows3(acc, "acc", n)
+        m = None if mag is None else _rows3(mag, "mag", n)
+        q = np.empty((n, 4))
+        s = np.empty(n) if spread else None
+        _check(
+            lib().bingham_ahrs_update_batch_spread(
+                self._h(), n, _ptr(g), _ptr(a), _ptr(m), _ptr(q), _ptr(s)
+            )
+        )
+        return (q, s) if spread else q
+
+    def quaternion(self):
+        """The estimate (w, x, y, z), sensor → world ENU, w ≥ 0."""
+        out = np.empty(4)
+        _check(lib().bingham_ahrs_quaternion(self._h(), _ptr(out)))
+        return out
+
+    def state(self):
+        """The Bingham state ``(m, z)`` of the orientation."""
+        m = np.empty((4, 4))
+        z = np.empty(4)
+        _check(lib().bingham_ahrs_state(self._h(), _ptr(m), _ptr(z)))
+        return m, z
+
+    def angular_spread(self):
+        """Angular spread (radians): 3 principal axes, then the total."""
+        out = np.empty(4)
+        _check(lib().bingham_ahrs_angular_spread(self._h(), _ptr(out)))
+        return out
+
+    def gyro_bias(self):
+        """The gyroscope bias estimate (rad/s, sensor frame)."""
+        out = np.empty(3)
+        _check(lib().bingham_ahrs_gyro_bias(self._h(), _ptr(out)))
+        return out

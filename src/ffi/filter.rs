@@ -434,3 +434,101 @@ mod tests {
         }
     }
 }
+
+/// Measurement update with a measured direction (d = 4 filters): `body` (sensor frame) is a
+/// noisy measurement of the known world direction `reference`, with von Mises–Fisher noise of
+/// concentration `kappa` (see `bingham_vector_observation()`; the filter's quaternion maps
+/// sensor to world). The likelihood is a Bingham density of the orientation, so the update is
+/// an exact Bayes product (equal to `bingham_multiply()` of the state with
+/// `bingham_vector_observation()`); the rotation about `reference` is not observed.
+///
+/// - `body`, `reference`: 3 doubles each, unit within `BINGHAM_UNIT_TOL`; `kappa`: finite, ≥ 0.
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT`, `BINGHAM_ERR_INVALID_DIMENSION` (a d = 2 filter),
+/// `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, non-unit vector, bad `kappa`),
+/// `BINGHAM_ERR_NUMERICAL` (overflow). On error the filter is unchanged.
+///
+/// # Safety
+/// `f`: a live handle; `body`, `reference`: 3 readable doubles each.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_update_vector(
+    f: *mut bingham_filter,
+    body: *const f64,
+    reference: *const f64,
+    kappa: f64,
+) -> bingham_status {
+    guard("bingham_filter_update_vector", || {
+        // SAFETY: caller contract.
+        let filter = unsafe { handle_mut("f", f)? };
+        need("body", body)?;
+        need("reference", reference)?;
+        // SAFETY: caller contract; 3 doubles each.
+        let (b, r) = unsafe { (read("body", body, 3)?, read("reference", reference, 3)?) };
+        filter.inner.update_vector(b, r, kappa)?;
+        Ok(())
+    })
+}
+
+/// The natural logarithm of the predictive density of a measured direction under the current
+/// state (d = 4): `log ∫ f_state(q) p(body | q) dq`, with `p(b | q)` the von Mises–Fisher
+/// density `kappa / (4π sinh kappa) exp(kappa rᵀ R(q) b)` on the unit sphere of directions
+/// (surface measure). Exact. For gating (an outlier has a low value) and adaptive `kappa`. The
+/// filter is not changed.
+///
+/// - `body`, `reference`, `kappa`: as in `bingham_filter_update_vector()`; `out`: receives the
+///   value.
+///
+/// Errors: as `bingham_filter_update_vector()`, plus `BINGHAM_ERR_NULL_ARGUMENT` (`out`). On
+/// error `*out` is not written.
+///
+/// # Safety
+/// `f`: a live handle; `body`, `reference`: 3 readable doubles each; `out`: one writable double.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_log_likelihood_vector(
+    f: *const bingham_filter,
+    body: *const f64,
+    reference: *const f64,
+    kappa: f64,
+    out: *mut f64,
+) -> bingham_status {
+    guard("bingham_filter_log_likelihood_vector", || {
+        // SAFETY: caller contract.
+        let filter = unsafe { handle("f", f)? };
+        need("body", body)?;
+        need("reference", reference)?;
+        need("out", out)?;
+        // SAFETY: caller contract; 3 doubles each.
+        let (b, r) = unsafe { (read("body", body, 3)?, read("reference", reference, 3)?) };
+        let value = filter.inner.log_likelihood_vector(b, r, kappa)?;
+        // SAFETY: checked pointer.
+        unsafe { write1(out, value) };
+        Ok(())
+    })
+}
+
+/// The angular spread (radians) of the filter's state, as `bingham_angular_spread()`:
+/// `spread[i]` (i < d − 1) along principal direction i (column i of the state's M),
+/// `spread[d-1]` the total (d = 4: the RMS of `2 sin(θ/2)`, θ the rotation angle from the mode,
+/// ≈ the RMS angle).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `spread`). On error nothing is written.
+///
+/// # Safety
+/// `f`: a live handle; `spread`: d writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_filter_angular_spread(
+    f: *const bingham_filter,
+    spread: *mut f64,
+) -> bingham_status {
+    guard("bingham_filter_angular_spread", || {
+        // SAFETY: caller contract.
+        let filter = unsafe { handle("f", f)? };
+        need("spread", spread)?;
+        let mut out = [0.0; 4];
+        let d = filter.inner.dim();
+        filter.inner.angular_spread_into(&mut out[..d])?;
+        // SAFETY: checked pointer; length d.
+        unsafe { write(spread, &out[..d]) };
+        Ok(())
+    })
+}

@@ -159,6 +159,35 @@ pub(crate) unsafe fn read<'a>(name: &str, p: *const f64, len: usize) -> FfiResul
     Ok(s)
 }
 
+/// Borrows the caller's input array `p[0..len]` after checking the pointer, without checking
+/// the values (for streams whose bad entries are refused one sample at a time).
+///
+/// # Safety
+/// As for [`read`].
+pub(crate) unsafe fn read_raw<'a>(name: &str, p: *const f64, len: usize) -> FfiResult<&'a [f64]> {
+    if len == 0 {
+        return Ok(&[]);
+    }
+    need(name, p)?;
+    // SAFETY: as in `read`.
+    Ok(unsafe { std::slice::from_raw_parts(p, len) })
+}
+
+/// A caller's output array `p[0..len]` as a mutable slice (for outputs written progressively,
+/// such as a batch's rows).
+///
+/// # Safety
+/// `p` must be non-NULL, aligned, and point to `len` writable doubles not aliased by any input
+/// slice in use.
+pub(crate) unsafe fn output<'a>(name: &str, p: *mut f64, len: usize) -> FfiResult<&'a mut [f64]> {
+    if len == 0 {
+        return Ok(&mut []);
+    }
+    need(name, p)?;
+    // SAFETY: caller contract.
+    Ok(unsafe { std::slice::from_raw_parts_mut(p, len) })
+}
+
 /// Copies a computed result into the caller's output array. Called only after every input has
 /// been read and the whole computation has succeeded, so outputs may overlap inputs (in-place
 /// use) and nothing is written on error.

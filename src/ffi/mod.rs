@@ -6,6 +6,8 @@
 //! - [`guard`]: the panic guard every export runs in, pointer/length checks, copying in and out,
 //!   and the thread-local last error message (`bingham_last_error_message`).
 //! - [`math`]: the distribution functions (`bingham_normalization_constant`, `bingham_mle`, …).
+//! - [`filter`]: the recursive filter handle `bingham_filter`.
+//! - [`ahrs`]: the IMU orientation filter handle `bingham_ahrs`.
 //!
 //! Conventions (see the header's preamble): row-major `double` arrays, `z` in any order and
 //! shift on input, sorted ascending with `z[d-1] = 0` on output, quaternions scalar first, F
@@ -27,6 +29,9 @@ pub mod math;
 
 pub mod filter;
 
+pub mod ahrs;
+
+pub use ahrs::*;
 pub use filter::*;
 pub use guard::bingham_last_error_message;
 pub use math::*;

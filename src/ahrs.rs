@@ -1,0 +1,669 @@
+//! An attitude and heading reference system (AHRS) on the recursive Bingham filter: gyroscope,
+//! accelerometer and (optionally) magnetometer, every sensor an exact Bayes step on a Bingham
+//! state of the orientation.
+//!
+//! Conventions: the orientation `q = (w, x, y, z)` (scalar first) maps the sensor frame to the
+//! world frame **ENU** (x east, y magnetic north, z up): `v_world = q ⊗ v_sensor ⊗ q*`.
+//! Units: gyroscope rad/s, accelerometer m/s² (specific force: `+g` up at rest), magnetometer in
+//! any consistent unit.
+//!
+//! # One sample
+//!
+//! 1. **Rest detection and gyroscope bias.** The gyroscope and accelerometer are low-pass
+//!    filtered; while both stay within thresholds of their low-pass values for
+//!    [`AhrsParams::rest_time`], the sensor is at rest and the bias estimate moves toward the
+//!    low-passed rate. During motion the bias follows the corrections the observations make
+//!    (an integral term, time constant [`AhrsParams::bias_time`]), clipped to
+//!    [`AhrsParams::bias_max`].
+//! 2. **Prediction** `q ← q ⊗ Δq ⊗ w`: `Δq` the body-frame increment of the bias-corrected rate
+//!    (exact rotation of the Bingham state), `w` isotropic rotation noise of standard deviation
+//!    `gyro_noise·√dt` ([`crate::observation::noise_from_angle_std`], moment-matched exactly).
+//! 3. **Accelerometer** as a vector observation of "up" ([`crate::observation::davenport_matrix`]):
+//!    the likelihood `exp(κ upᵀ R(q) a/|a|)` is Bingham in `q`, the update exact, heading
+//!    untouched. `κ = 1/acc_noise²`, reduced when `|a|` departs from `gravity` (linear
+//!    acceleration): `κ / (1 + ((|a| − g)/acc_reject)²)`. Samples with `|a| < gravity/4`
+//!    (free fall, or no accelerometer data) are skipped.
+//! 4. **Magnetometer** as a heading observation that cannot tilt the estimate: the field is
+//!    rotated to the world frame with the current estimate, its horizontal direction gives the
+//!    heading error `δ`, and the likelihood `exp(−2κ e_z²)` with `e = q ⊗ q_m*`,
+//!    `q_m = Rz(δ) ⊗ q̂` (the von Mises density `exp(κ cos ψ)` of the heading error `ψ`, written
+//!    in `q`) is a Bingham density whose only concentrated direction is the rotation about the
+//!    vertical: at the estimate it carries no tilt information at all. `κ = 1/mag_noise²`.
+//!    Magnetic disturbances are rejected: the field's norm and dip angle are tracked; a sample
+//!    whose norm differs from the reference by more than `mag_norm_tol` (relative) or whose dip
+//!    differs by more than `mag_dip_tol` is not used. A disturbance that stays constant for
+//!    `mag_new_time` becomes the new reference.
+//!
+//! The first sample initializes the state: tilt from the accelerometer, heading from the
+//! magnetometer (without one the heading is uniform: honestly unknown), each with the
+//! concentration of [`AhrsParams::init_std`].
+//!
+//! Every step is allocation-free; a refused sample leaves the AHRS exactly as it was.
+
+use crate::error::{Error, Result};
+use crate::filter::BinghamFilter;
+use crate::observation::{noise_from_angle_std, observation_exponent};
+use crate::quaternion::q4;
+
+/// The world's "up" (ENU).
+const UP: [f64; 3] = [0.0, 0.0, 1.0];
+
+/// Parameters of the AHRS. [`AhrsParams::new`] gives the defaults, tuned once on the nine BROAD
+/// trials (one set for all recordings).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AhrsParams {
+    /// Sampling period in seconds (> 0).
+    pub sample_time: f64,
+    /// Orientation process noise in rad/√s: the prediction adds isotropic rotation noise with
+    /// standard deviation `gyro_noise·√sample_time` per step (gyroscope noise, bias drift and
+    /// model error together).
+    pub gyro_noise: f64,
+    /// Angular standard deviation (rad) of one accelerometer direction sample as a measurement
+    /// of "up" (`κ = 1/acc_noise²`).
+    pub acc_noise: f64,
+    /// Linear-acceleration rejection scale in m/s²: `κ` is divided by
+    /// `1 + ((|ā| − gravity)/acc_reject)²`, `ā` the low-passed accelerometer.
+    pub acc_reject: f64,
+    /// Time constant (s) of the accelerometer's low-pass filter in the gyroscope-integrated
+    /// (quasi-inertial) frame: linear accelerations average out there, gravity does not.
+    pub acc_tau: f64,
+    /// Time constant (s) of the magnetometer's low-pass filter in the same frame.
+    pub mag_tau: f64,
+    /// Magnitude of gravity in m/s².
+    pub gravity: f64,
+    /// Angular standard deviation (rad) of one magnetometer heading sample (`κ = 1/mag_noise²`).
+    pub mag_noise: f64,
+    /// Relative tolerance on the magnetic field's norm before a sample counts as disturbed.
+    pub mag_norm_tol: f64,
+    /// Tolerance (rad) on the field's dip angle before a sample counts as disturbed.
+    pub mag_dip_tol: f64,
+    /// Time constant (s) with which the reference norm and dip follow undisturbed samples.
+    pub mag_ref_time: f64,
+    /// A disturbance whose norm and dip stay steady this long (s) becomes the new reference.
+    pub mag_new_time: f64,
+    /// Time constant (s) of the gyroscope-bias estimation from the observations' corrections
+    /// during motion (`0` disables it).
+    pub bias_time: f64,
+    /// Largest gyroscope bias (rad/s) per axis the estimate may reach.
+    pub bias_max: f64,
+    /// Time (s) the sensor must be still before the bias is taken from the gyroscope.
+    pub rest_time: f64,
+    /// Rest threshold on the gyroscope's deviation from its low-pass value (rad/s).
+    pub rest_gyro: f64,
+    /// Rest threshold on the accelerometer's deviation from its low-pass value (m/s²).
+    pub rest_acc: f64,
+    /// Time constant (s) of the bias estimate while at rest.
+    pub rest_bias_time: f64,
+    /// Angular standard deviation (rad) of the initial tilt and heading.
+    pub init_std: f64,
+}
+
+impl AhrsParams {
+    /// The default (tuned) parameters for the sampling period `sample_time` (s).
+    pub fn new(sample_time: f64) -> AhrsParams {
+        AhrsParams {
+            sample_time,
+            gyro_noise: 0.02,
+            acc_noise: 1.0,
+            acc_reject: 1.0,
+            acc_tau: 3.0,
+            mag_tau: 3.0,
+            gravity: 9.81,
+            mag_noise: 1.5,
+            mag_norm_tol: 0.1,
+            mag_dip_tol: 10f64.to_radians(),
+            mag_ref_time: 20.0,
+            mag_new_time: 20.0,
+            bias_time: 100.0,
+            bias_max: 2f64.to_radians(),
+            rest_time: 1.5,
+            rest_gyro: 2f64.to_radians(),
+            rest_acc: 0.5,
+            rest_bias_time: 2.0,
+            init_std: 0.1,
+        }
+    }
+
+    /// Checks every field (finite; periods, noises and thresholds positive; `bias_time ≥ 0`).
+    pub fn validate(&self) -> Result<()> {
+        let positive = [
+            ("sample_time", self.sample_time),
+            ("gyro_noise", self.gyro_noise),
+            ("acc_noise", self.acc_noise),
+            ("acc_reject", self.acc_reject),
+            ("acc_tau", self.acc_tau),
+            ("mag_tau", self.mag_tau),
+            ("gravity", self.gravity),
+            ("mag_noise", self.mag_noise),
+            ("mag_norm_tol", self.mag_norm_tol),
+            ("mag_dip_tol", self.mag_dip_tol),
+            ("mag_ref_time", self.mag_ref_time),
+            ("mag_new_time", self.mag_new_time),
+            ("bias_max", self.bias_max),
+            ("rest_time", self.rest_time),
+            ("rest_gyro", self.rest_gyro),
+            ("rest_acc", self.rest_acc),
+            ("rest_bias_time", self.rest_bias_time),
+            ("init_std", self.init_std),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::InvalidArgument(format!(
+                    "AHRS parameter `{name}` must be finite and > 0, got {v}"
+                )));
+            }
+        }
+        if !(self.bias_time.is_finite() && self.bias_time >= 0.0) {
+            return Err(Error::InvalidArgument(format!(
+                "AHRS parameter `bias_time` must be finite and >= 0, got {}",
+                self.bias_time
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// First-order low-pass coefficient for time constant `tau` at period `dt`.
+fn lp_coeff(dt: f64, tau: f64) -> f64 {
+    1.0 - (-dt / tau).exp()
+}
+
+fn norm3(v: &[f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn scale3(a: &[f64; 3], s: f64) -> [f64; 3] {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+
+fn check_sample(what: &str, v: &[f64; 3]) -> Result<()> {
+    match v.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(i) => Err(Error::InvalidArgument(format!(
+            "`{what}[{i}]` = {} is not finite",
+            v[i]
+        ))),
+    }
+}
+
+/// The exponent matrix `−2κ u uᵀ` of the heading likelihood `exp(−2κ e_z²)`, `e = q ⊗ q_m*`:
+/// `e_z = uᵀ q` with `u` the last row of `R(q_m*)` (`x ⊕ y = R(y) x`).
+fn heading_exponent(q_m: &[f64; 4], kappa: f64) -> [[f64; 4]; 4] {
+    let c = q4::conj(q_m);
+    // Row 3 of R(c) (see quaternion::right_matrix): [c3, c2, −c1, c0].
+    let u = [c[3], c[2], -c[1], c[0]];
+    let mut p = [[0.0; 4]; 4];
+    for i in 0..4 {
+        for j in 0..4 {
+            p[i][j] = -2.0 * kappa * u[i] * u[j];
+        }
+    }
+    p
+}
+
+/// Coefficients `(b0, b1, b2, a1, a2)` of a second-order Butterworth low-pass filter with time
+/// constant `tau` (cut-off `√2/(2πτ)`) at period `dt` (bilinear transform).
+fn butterworth(dt: f64, tau: f64) -> [f64; 5] {
+    let fc = std::f64::consts::SQRT_2 / (2.0 * std::f64::consts::PI * tau);
+    let c = (std::f64::consts::PI * fc * dt).tan();
+    let d = c * c + std::f64::consts::SQRT_2 * c + 1.0;
+    let b0 = c * c / d;
+    [
+        b0,
+        2.0 * b0,
+        b0,
+        2.0 * (c * c - 1.0) / d,
+        (1.0 - std::f64::consts::SQRT_2 * c + c * c) / d,
+    ]
+}
+
+/// A second-order low-pass filter of a vector that is fixed in the quasi-inertial frame: its
+/// output and states are expressed in the sensor frame and turned with every gyroscope
+/// increment, so the filter averages in the frame where gravity and the magnetic field stand
+/// still.
+#[derive(Debug, Clone, PartialEq)]
+struct InertialLowPass {
+    coeff: [f64; 5],
+    y: [f64; 3],
+    s0: [f64; 3],
+    s1: [f64; 3],
+}
+
+impl InertialLowPass {
+    /// The filter in steady state at `x`.
+    fn new(coeff: [f64; 5], x: &[f64; 3]) -> InertialLowPass {
+        let b0 = coeff[0];
+        let (b2, a2) = (coeff[2], coeff[4]);
+        InertialLowPass {
+            coeff,
+            y: *x,
+            s0: scale3(x, 1.0 - b0),
+            s1: scale3(x, b2 - a2),
+        }
+    }
+
+    /// Expresses the state in the next sensor frame (`dq` the body-frame increment).
+    fn turn(&mut self, dq: &[f64; 4]) {
+        self.y = q4::rotate_inverse(dq, &self.y);
+        self.s0 = q4::rotate_inverse(dq, &self.s0);
+        self.s1 = q4::rotate_inverse(dq, &self.s1);
+    }
+
+    /// One sample (direct form II transposed).
+    fn step(&mut self, x: &[f64; 3]) {
+        let [b0, b1, b2, a1, a2] = self.coeff;
+        for i in 0..3 {
+            let y = b0 * x[i] + self.s0[i];
+            self.s0[i] = b1 * x[i] - a1 * y + self.s1[i];
+            self.s1[i] = b2 * x[i] - a2 * y;
+            self.y[i] = y;
+        }
+    }
+}
+
+/// Magnetic disturbance tracking (norm and dip of the field).
+#[derive(Debug, Clone, PartialEq)]
+struct MagRef {
+    norm: f64,
+    dip: f64,
+    /// The current candidate for a new reference and how long it has held.
+    cand_norm: f64,
+    cand_dip: f64,
+    cand_time: f64,
+}
+
+/// The AHRS. Create it with [`Ahrs::new`], feed it samples with [`Ahrs::update`] (or
+/// [`Ahrs::update_batch`]), read [`Ahrs::quaternion`], [`Ahrs::state`] and
+/// [`Ahrs::angular_spread`]. `Send` and `Sync`; no global state.
+#[derive(Debug, Clone)]
+pub struct Ahrs {
+    params: AhrsParams,
+    /// The process noise (row-major M, z), fixed for the AHRS's life.
+    noise_m: [f64; 16],
+    noise_z: [f64; 4],
+    filter: Option<BinghamFilter>,
+    bias: [f64; 3],
+    gyr_lp: [f64; 3],
+    acc_lp: [f64; 3],
+    rest_timer: f64,
+    mag: Option<MagRef>,
+    acc_filter: InertialLowPass,
+    mag_filter: Option<InertialLowPass>,
+    samples: u64,
+}
+
+impl Ahrs {
+    /// An AHRS with the given parameters (validated). It initializes itself from the first
+    /// sample. Errors: [`Error::InvalidArgument`] for a bad parameter.
+    pub fn new(params: &AhrsParams) -> Result<Ahrs> {
+        params.validate()?;
+        let noise = noise_from_angle_std(4, params.gyro_noise * params.sample_time.sqrt())?;
+        let mut noise_m = [0.0; 16];
+        noise_m.copy_from_slice(&noise.m_row_major());
+        let mut noise_z = [0.0; 4];
+        noise_z.copy_from_slice(noise.z().as_slice());
+        Ok(Ahrs {
+            params: *params,
+            noise_m,
+            noise_z,
+            filter: None,
+            bias: [0.0; 3],
+            gyr_lp: [0.0; 3],
+            acc_lp: [0.0; 3],
+            rest_timer: 0.0,
+            mag: None,
+            acc_filter: InertialLowPass::new(
+                butterworth(params.sample_time, params.acc_tau),
+                &[0.0; 3],
+            ),
+            mag_filter: None,
+            samples: 0,
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &AhrsParams {
+        &self.params
+    }
+
+    /// Whether the first sample has been processed (before it there is no estimate).
+    pub fn is_initialized(&self) -> bool {
+        self.filter.is_some()
+    }
+
+    /// The number of samples processed.
+    pub fn samples(&self) -> u64 {
+        self.samples
+    }
+
+    /// The orientation estimate (the Bingham state's mode), sensor → world (ENU), scalar first,
+    /// sign chosen with `w ≥ 0`. Before the first sample: the identity.
+    pub fn quaternion(&self) -> [f64; 4] {
+        match &self.filter {
+            Some(f) => {
+                let q = f.mode4().unwrap_or([1.0, 0.0, 0.0, 0.0]);
+                if q[0] < 0.0 {
+                    [-q[0], -q[1], -q[2], -q[3]]
+                } else {
+                    q
+                }
+            }
+            None => [1.0, 0.0, 0.0, 0.0],
+        }
+    }
+
+    /// The Bingham state `(M row-major 4×4, z)` into the buffers (lengths 16 and 4). Before the
+    /// first sample: the uniform distribution (`M = I`, `z = 0`).
+    pub fn state_into(&self, m: &mut [f64], z: &mut [f64]) -> Result<()> {
+        match &self.filter {
+            Some(f) => f.state_into(m, z),
+            None => {
+                if m.len() != 16 || z.len() != 4 {
+                    return Err(Error::InvalidDimension(format!(
+                        "state buffers must have lengths 16 and 4, got {} and {}",
+                        m.len(),
+                        z.len()
+                    )));
+                }
+                m.iter_mut().enumerate().for_each(|(k, v)| {
+                    *v = if k % 5 == 0 { 1.0 } else { 0.0 };
+                });
+                z.fill(0.0);
+                Ok(())
+            }
+        }
+    }
+
+    /// The underlying filter (`None` before the first sample).
+    pub fn filter(&self) -> Option<&BinghamFilter> {
+        self.filter.as_ref()
+    }
+
+    /// The angular spread of the state (radians, see
+    /// [`crate::observation::spread_from_omega`]): `out[0..3]` along the principal directions,
+    /// `out[3]` the total (≈ the RMS rotation angle between the truth and the estimate, if the
+    /// state is calibrated). Before the first sample: that of the uniform distribution.
+    pub fn angular_spread(&self, out: &mut [f64; 4]) -> Result<()> {
+        match &self.filter {
+            Some(f) => f.angular_spread_into(out),
+            None => {
+                crate::observation::spread_from_omega(&[0.25; 4], out);
+                Ok(())
+            }
+        }
+    }
+
+    /// The gyroscope bias estimate (rad/s, sensor frame).
+    pub fn gyro_bias(&self) -> [f64; 3] {
+        self.bias
+    }
+
+    /// Processes one sample: `gyr` (rad/s), `acc` (m/s²), `mag` (any unit, or `None`).
+    ///
+    /// Refused (error, nothing changed): NaN/Inf in any value ([`Error::InvalidArgument`]);
+    /// the first sample with `|acc| < gravity/4` (no tilt to start from). Skipped parts (not an
+    /// error): the accelerometer update when `|acc| < gravity/4` (free fall), the magnetometer
+    /// update for a zero field, a field along the vertical, or a disturbed field.
+    pub fn update(&mut self, gyr: &[f64; 3], acc: &[f64; 3], mag: Option<&[f64; 3]>) -> Result<()> {
+        check_sample("gyr", gyr)?;
+        check_sample("acc", acc)?;
+        if let Some(m) = mag {
+            check_sample("mag", m)?;
+        }
+        let mag = mag.filter(|m| norm3(m) > 0.0);
+        if self.filter.is_none() {
+            return self.initialize(gyr, acc, mag);
+        }
+        // Work on a copy of the filter: the state is assigned only when every step succeeded.
+        let mut f = self.filter.clone().expect("initialized");
+        let p = self.params;
+        let dt = p.sample_time;
+
+        // 1. Rest detection and the bias at rest.
+        let (kg, ka) = (lp_coeff(dt, 0.5), lp_coeff(dt, 0.5));
+        let mut gyr_lp = self.gyr_lp;
+        let mut acc_lp = self.acc_lp;
+        for i in 0..3 {
+            gyr_lp[i] += kg * (gyr[i] - gyr_lp[i]);
+            acc_lp[i] += ka * (acc[i] - acc_lp[i]);
+        }
+        let dg = norm3(&[gyr[0] - gyr_lp[0], gyr[1] - gyr_lp[1], gyr[2] - gyr_lp[2]]);
+        let da = norm3(&[acc[0] - acc_lp[0], acc[1] - acc_lp[1], acc[2] - acc_lp[2]]);
+        let still = dg < p.rest_gyro && da < p.rest_acc && norm3(&gyr_lp) < 2.0 * p.bias_max;
+        let rest_timer = if still { self.rest_timer + dt } else { 0.0 };
+        let mut bias = self.bias;
+        if rest_timer >= p.rest_time {
+            let k = lp_coeff(dt, p.rest_bias_time);
+            for i in 0..3 {
+                bias[i] += k * (gyr_lp[i] - bias[i]);
+            }
+        }
+
+        // 2. Prediction with the body-frame increment of the bias-corrected rate.
+        let w = [
+            (gyr[0] - bias[0]) * dt,
+            (gyr[1] - bias[1]) * dt,
+            (gyr[2] - bias[2]) * dt,
+        ];
+        let dq = q4::from_rotation_vector(&w);
+        f.predict_rotation(&dq, &self.noise_m, &self.noise_z)?;
+        let q_prior = f.mode4()?;
+
+        // 3. Accelerometer: "up" seen in the sensor frame, low-passed in the inertial frame.
+        let mut acc_filter = self.acc_filter.clone();
+        acc_filter.turn(&dq);
+        if norm3(acc) >= 0.25 * p.gravity {
+            acc_filter.step(acc);
+        }
+        let an = norm3(&acc_filter.y);
+        if an >= 0.25 * p.gravity {
+            let excess = (an - p.gravity) / p.acc_reject;
+            let kappa = 1.0 / (p.acc_noise * p.acc_noise) / (1.0 + excess * excess);
+            let b = scale3(&acc_filter.y, 1.0 / an);
+            f.update_exponent(&observation_exponent(&b, &UP, kappa))?;
+        }
+
+        // 4. Magnetometer: heading only, with disturbance rejection, low-passed as the
+        // accelerometer (disturbed samples are not fed to the filter).
+        let mut mag_ref = self.mag.clone();
+        let mut mag_filter = self.mag_filter.clone();
+        if let Some(mf) = mag_filter.as_mut() {
+            mf.turn(&dq);
+        }
+        if let Some(m) = mag {
+            let q = f.mode4()?;
+            if let Some(kappa) = self.magnetic_weight(&q, m, &mut mag_ref) {
+                let mf = mag_filter.get_or_insert_with(|| {
+                    InertialLowPass::new(butterworth(dt, p.mag_tau), m)
+                });
+                mf.step(m);
+                let mw = q4::rotate(&q, &mf.y);
+                let h = (mw[0] * mw[0] + mw[1] * mw[1]).sqrt();
+                if h > 1e-3 * norm3(&mf.y) {
+                    // δ rotates the horizontal field onto north (Rz(δ) (sin δ, cos δ) = (0, 1)).
+                    let delta = mw[0].atan2(mw[1]);
+                    let rz = [(0.5 * delta).cos(), 0.0, 0.0, (0.5 * delta).sin()];
+                    let q_m = q4::mul(&rz, &q);
+                    f.update_exponent(&heading_exponent(&q_m, kappa))?;
+                }
+            }
+        }
+
+        // 5. Bias from the correction during motion (integral feedback).
+        if p.bias_time > 0.0 && rest_timer < p.rest_time {
+            let q_post = f.mode4()?;
+            let corr = q4::to_rotation_vector(&q4::mul(&q4::conj(&q_prior), &q_post));
+            for i in 0..3 {
+                bias[i] -= corr[i] / p.bias_time;
+            }
+        }
+        for b in bias.iter_mut() {
+            *b = b.clamp(-p.bias_max, p.bias_max);
+        }
+
+        self.filter = Some(f);
+        self.bias = bias;
+        self.gyr_lp = gyr_lp;
+        self.acc_lp = acc_lp;
+        self.rest_timer = rest_timer;
+        self.mag = mag_ref;
+        self.acc_filter = acc_filter;
+        self.mag_filter = mag_filter;
+        self.samples += 1;
+        Ok(())
+    }
+
+    /// The heading concentration for this magnetometer sample, or `None` when the field is
+    /// disturbed; updates the disturbance tracking in `r`.
+    fn magnetic_weight(&self, q: &[f64; 4], m: &[f64; 3], r: &mut Option<MagRef>) -> Option<f64> {
+        let p = &self.params;
+        let norm = norm3(m);
+        let up_b = q4::rotate_inverse(q, &UP);
+        let dip = (dot3(m, &up_b) / norm).clamp(-1.0, 1.0).asin();
+        let reference = r.get_or_insert(MagRef {
+            norm,
+            dip,
+            cand_norm: norm,
+            cand_dip: dip,
+            cand_time: 0.0,
+        });
+        let dt = p.sample_time;
+        let disturbed = (norm - reference.norm).abs() > p.mag_norm_tol * reference.norm
+            || (dip - reference.dip).abs() > p.mag_dip_tol;
+        if !disturbed {
+            let k = lp_coeff(dt, p.mag_ref_time);
+            reference.norm += k * (norm - reference.norm);
+            reference.dip += k * (dip - reference.dip);
+            reference.cand_norm = norm;
+            reference.cand_dip = dip;
+            reference.cand_time = 0.0;
+            return Some(1.0 / (p.mag_noise * p.mag_noise));
+        }
+        // A steady disturbance: follow the candidate; accept it once it has held long enough.
+        let steady = (norm - reference.cand_norm).abs() <= p.mag_norm_tol * reference.cand_norm
+            && (dip - reference.cand_dip).abs() <= p.mag_dip_tol;
+        if steady {
+            let k = lp_coeff(dt, 1.0);
+            reference.cand_norm += k * (norm - reference.cand_norm);
+            reference.cand_dip += k * (dip - reference.cand_dip);
+            reference.cand_time += dt;
+            if reference.cand_time >= p.mag_new_time {
+                reference.norm = reference.cand_norm;
+                reference.dip = reference.cand_dip;
+                reference.cand_time = 0.0;
+            }
+        } else {
+            reference.cand_norm = norm;
+            reference.cand_dip = dip;
+            reference.cand_time = 0.0;
+        }
+        None
+    }
+
+    /// The first sample: tilt from `acc`, heading from `mag` (uniform without it).
+    fn initialize(&mut self, gyr: &[f64; 3], acc: &[f64; 3], mag: Option<&[f64; 3]>) -> Result<()> {
+        let p = self.params;
+        let an = norm3(acc);
+        if an < 0.25 * p.gravity {
+            return Err(Error::InvalidArgument(format!(
+                "the first sample must show gravity: |acc| = {an} < gravity/4 (free fall or \
+                 no data); the AHRS starts from a sample with a usable accelerometer"
+            )));
+        }
+        let up_b = scale3(acc, 1.0 / an);
+        let kappa = 1.0 / (p.init_std * p.init_std);
+        let mut f = BinghamFilter::new(
+            4,
+            &[
+                1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+            ],
+            &[0.0; 4],
+        )?;
+        f.update_exponent(&observation_exponent(&up_b, &UP, kappa))?;
+        let mut mag_ref = None;
+        if let Some(m) = mag {
+            let east_b = cross3(m, &up_b);
+            let en = norm3(&east_b);
+            if en > 1e-3 * norm3(m) {
+                let east_b = scale3(&east_b, 1.0 / en);
+                let north_b = cross3(&up_b, &east_b);
+                let q0 = q4::from_matrix(&[east_b, north_b, up_b]);
+                f.update_exponent(&heading_exponent(&q0, kappa))?;
+                let norm = norm3(m);
+                let dip = (dot3(m, &up_b) / norm).clamp(-1.0, 1.0).asin();
+                mag_ref = Some(MagRef {
+                    norm,
+                    dip,
+                    cand_norm: norm,
+                    cand_dip: dip,
+                    cand_time: 0.0,
+                });
+            }
+        }
+        self.filter = Some(f);
+        self.gyr_lp = *gyr;
+        self.acc_lp = *acc;
+        self.acc_filter = InertialLowPass::new(butterworth(p.sample_time, p.acc_tau), acc);
+        self.mag_filter = mag.map(|m| InertialLowPass::new(butterworth(p.sample_time, p.mag_tau), m));
+        self.mag = mag_ref;
+        self.samples = 1;
+        Ok(())
+    }
+
+    /// Processes `gyr.len()` samples (`acc` the same length, `mag` too or `None`), writing the
+    /// quaternion after each into `quat` (and, if given, the total angular spread into
+    /// `spread`). Stops at the first refused sample: the samples before it are processed and
+    /// their outputs written; the error names the index.
+    pub fn update_batch(
+        &mut self,
+        gyr: &[[f64; 3]],
+        acc: &[[f64; 3]],
+        mag: Option<&[[f64; 3]]>,
+        quat: &mut [[f64; 4]],
+        mut spread: Option<&mut [f64]>,
+    ) -> Result<()> {
+        let n = gyr.len();
+        let lengths_ok = acc.len() == n
+            && quat.len() == n
+            && mag.is_none_or(|m| m.len() == n)
+            && spread.as_ref().is_none_or(|s| s.len() == n);
+        if !lengths_ok {
+            return Err(Error::InvalidDimension(
+                "batch arrays must all have the same number of samples".into(),
+            ));
+        }
+        for k in 0..n {
+            self.update(&gyr[k], &acc[k], mag.map(|m| &m[k]))
+                .map_err(|e| prefix(e, k))?;
+            quat[k] = self.quaternion();
+            if let Some(s) = spread.as_deref_mut() {
+                let mut out = [0.0; 4];
+                self.angular_spread(&mut out).map_err(|e| prefix(e, k))?;
+                s[k] = out[3];
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `e` with "sample k: " in front of its message.
+fn prefix(e: Error, k: usize) -> Error {
+    match e {
+        Error::InvalidDimension(m) => Error::InvalidDimension(format!("sample {k}: {m}")),
+        Error::InvalidArgument(m) => Error::InvalidArgument(format!("sample {k}: {m}")),
+        Error::NotConverged(m) => Error::NotConverged(format!("sample {k}: {m}")),
+        Error::Numerical(m) => Error::Numerical(format!("sample {k}: {m}")),
+    }
+}

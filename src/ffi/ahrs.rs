@@ -1,0 +1,470 @@
+//! The AHRS behind the opaque handle `bingham_ahrs` (the C side of [`crate::ahrs::Ahrs`]).
+//! Thin wrappers: check pointers, read the samples, call the core, copy results out.
+
+use super::guard::{
+    free_handle, guard, handle, handle_mut, need, optional, output, read, read_raw, write,
+    write_handle, Failure,
+};
+use super::status::bingham_status;
+use crate::ahrs::{Ahrs, AhrsParams};
+
+/// Parameters of the AHRS (`bingham_ahrs_new()`). Fill it with `bingham_ahrs_params_default()`
+/// (the defaults are the tuned set: one parameter set for all recordings, tuned on the BROAD
+/// benchmark), then change fields if needed. All angles in radians, times in seconds.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[allow(non_camel_case_types)]
+pub struct bingham_ahrs_params {
+    /// Sampling period in seconds (> 0).
+    pub sample_time: f64,
+    /// Orientation process noise in rad/√s: the prediction adds isotropic rotation noise with
+    /// standard deviation `gyro_noise·√sample_time` per step (gyroscope noise, bias drift and
+    /// model error together).
+    pub gyro_noise: f64,
+    /// Angular standard deviation (rad) of one accelerometer direction sample as a measurement
+    /// of "up" (`κ = 1/acc_noise²`).
+    pub acc_noise: f64,
+    /// Linear-acceleration rejection scale in m/s²: `κ` is divided by
+    /// `1 + ((|ā| − gravity)/acc_reject)²`, `ā` the low-passed accelerometer.
+    pub acc_reject: f64,
+    /// Time constant (s) of the accelerometer's low-pass filter in the gyroscope-integrated
+    /// (quasi-inertial) frame: linear accelerations average out there, gravity does not.
+    pub acc_tau: f64,
+    /// Time constant (s) of the magnetometer's low-pass filter in the same frame.
+    pub mag_tau: f64,
+    /// Magnitude of gravity in m/s².
+    pub gravity: f64,
+    /// Angular standard deviation (rad) of one magnetometer heading sample (`κ = 1/mag_noise²`).
+    pub mag_noise: f64,
+    /// Relative tolerance on the magnetic field's norm before a sample counts as disturbed.
+    pub mag_norm_tol: f64,
+    /// Tolerance (rad) on the field's dip angle before a sample counts as disturbed.
+    pub mag_dip_tol: f64,
+    /// Time constant (s) with which the reference norm and dip follow undisturbed samples.
+    pub mag_ref_time: f64,
+    /// A disturbance whose norm and dip stay steady this long (s) becomes the new reference.
+    pub mag_new_time: f64,
+    /// Time constant (s) of the gyroscope-bias estimation from the observations' corrections
+    /// during motion (`0` disables it).
+    pub bias_time: f64,
+    /// Largest gyroscope bias (rad/s) per axis the estimate may reach.
+    pub bias_max: f64,
+    /// Time (s) the sensor must be still before the bias is taken from the gyroscope.
+    pub rest_time: f64,
+    /// Rest threshold on the gyroscope's deviation from its low-pass value (rad/s).
+    pub rest_gyro: f64,
+    /// Rest threshold on the accelerometer's deviation from its low-pass value (m/s²).
+    pub rest_acc: f64,
+    /// Time constant (s) of the bias estimate while at rest.
+    pub rest_bias_time: f64,
+    /// Angular standard deviation (rad) of the initial tilt and heading.
+    pub init_std: f64,
+}
+
+impl From<&bingham_ahrs_params> for AhrsParams {
+    fn from(p: &bingham_ahrs_params) -> AhrsParams {
+        AhrsParams {
+            sample_time: p.sample_time,
+            gyro_noise: p.gyro_noise,
+            acc_noise: p.acc_noise,
+            acc_reject: p.acc_reject,
+            acc_tau: p.acc_tau,
+            mag_tau: p.mag_tau,
+            gravity: p.gravity,
+            mag_noise: p.mag_noise,
+            mag_norm_tol: p.mag_norm_tol,
+            mag_dip_tol: p.mag_dip_tol,
+            mag_ref_time: p.mag_ref_time,
+            mag_new_time: p.mag_new_time,
+            bias_time: p.bias_time,
+            bias_max: p.bias_max,
+            rest_time: p.rest_time,
+            rest_gyro: p.rest_gyro,
+            rest_acc: p.rest_acc,
+            rest_bias_time: p.rest_bias_time,
+            init_std: p.init_std,
+        }
+    }
+}
+
+impl From<&AhrsParams> for bingham_ahrs_params {
+    fn from(p: &AhrsParams) -> bingham_ahrs_params {
+        bingham_ahrs_params {
+            sample_time: p.sample_time,
+            gyro_noise: p.gyro_noise,
+            acc_noise: p.acc_noise,
+            acc_reject: p.acc_reject,
+            acc_tau: p.acc_tau,
+            mag_tau: p.mag_tau,
+            gravity: p.gravity,
+            mag_noise: p.mag_noise,
+            mag_norm_tol: p.mag_norm_tol,
+            mag_dip_tol: p.mag_dip_tol,
+            mag_ref_time: p.mag_ref_time,
+            mag_new_time: p.mag_new_time,
+            bias_time: p.bias_time,
+            bias_max: p.bias_max,
+            rest_time: p.rest_time,
+            rest_gyro: p.rest_gyro,
+            rest_acc: p.rest_acc,
+            rest_bias_time: p.rest_bias_time,
+            init_std: p.init_std,
+        }
+    }
+}
+
+/// An attitude and heading reference system on the recursive Bingham filter: gyroscope
+/// propagation, accelerometer and magnetometer as exact Bayes updates of a Bingham distribution
+/// of the orientation, with gyroscope-bias estimation, linear-acceleration and
+/// magnetic-disturbance rejection. Opaque: create it with `bingham_ahrs_new()`, release it with
+/// `bingham_ahrs_free()`; the caller owns it.
+///
+/// Conventions: the orientation q = (w, x, y, z) (scalar first) maps the sensor frame to the
+/// world frame ENU (x east, y magnetic north, z up): `v_world = q v_sensor q*`. Units: gyroscope
+/// rad/s, accelerometer m/s² (specific force, +g up at rest), magnetometer any consistent unit.
+///
+/// The first sample initializes the state (tilt from the accelerometer, heading from the
+/// magnetometer; without a magnetometer the heading stays uniform, honestly unknown, and
+/// `bingham_ahrs_quaternion()` returns one of the equally likely orientations).
+///
+/// Thread safety: one thread at a time per handle (functions taking `const bingham_ahrs *` may
+/// run concurrently with each other); different handles are independent. Memory: no heap
+/// allocation per sample.
+#[allow(non_camel_case_types)]
+pub struct bingham_ahrs {
+    inner: Ahrs,
+}
+
+/// Fills `p` with the default parameters for the sampling period `sample_time` (seconds, > 0).
+/// The defaults are the tuned set.
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`), `BINGHAM_ERR_INVALID_ARGUMENT` (`sample_time` not
+/// finite or ≤ 0). On error `*p` is not written.
+///
+/// # Safety
+/// `p`: a writable `bingham_ahrs_params`.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_params_default(
+    sample_time: f64,
+    p: *mut bingham_ahrs_params,
+) -> bingham_status {
+    guard("bingham_ahrs_params_default", || {
+        need("p", p)?;
+        let params = AhrsParams::new(sample_time);
+        params.validate()?;
+        // SAFETY: checked non-NULL and aligned.
+        unsafe { *p = bingham_ahrs_params::from(&params) };
+        Ok(())
+    })
+}
+
+/// Creates an AHRS with the parameters `p` (validated: every field finite, periods, noises and
+/// thresholds > 0, `bias_time` ≥ 0).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`, `out`), `BINGHAM_ERR_INVALID_ARGUMENT` (a bad
+/// field; the message names it). On error `*out` is not written.
+///
+/// # Safety
+/// `p`: a readable `bingham_ahrs_params`; `out`: a writable `bingham_ahrs *`.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_new(
+    p: *const bingham_ahrs_params,
+    out: *mut *mut bingham_ahrs,
+) -> bingham_status {
+    guard("bingham_ahrs_new", || {
+        // SAFETY: caller contract.
+        let params = unsafe { handle("p", p)? };
+        need("out", out)?;
+        let inner = Ahrs::new(&AhrsParams::from(params))?;
+        // SAFETY: `out` checked non-NULL and aligned.
+        unsafe { write_handle(out, bingham_ahrs { inner }) };
+        Ok(())
+    })
+}
+
+/// Releases an AHRS. `NULL` is a no-op. The handle must not be used afterwards.
+///
+/// # Safety
+/// `a` must be `NULL` or a live handle from this library, not freed before and not in use by
+/// another thread.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_free(a: *mut bingham_ahrs) {
+    let _ = std::panic::catch_unwind(|| {
+        // SAFETY: caller contract.
+        unsafe { free_handle(a) }
+    });
+}
+
+/// Creates an independent copy of an AHRS (state, bias, disturbance tracking).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `out`). On error `*out` is not written.
+///
+/// # Safety
+/// `a`: a live handle; `out`: a writable `bingham_ahrs *`.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_clone(
+    a: *const bingham_ahrs,
+    out: *mut *mut bingham_ahrs,
+) -> bingham_status {
+    guard("bingham_ahrs_clone", || {
+        // SAFETY: caller contract.
+        let ahrs = unsafe { handle("a", a)? };
+        need("out", out)?;
+        let copy = bingham_ahrs {
+            inner: ahrs.inner.clone(),
+        };
+        // SAFETY: `out` checked non-NULL and aligned.
+        unsafe { write_handle(out, copy) };
+        Ok(())
+    })
+}
+
+/// Processes one sample.
+///
+/// - `gyr`: angular rate, rad/s, sensor frame (3 doubles).
+/// - `acc`: specific force, m/s², sensor frame (+g up at rest). Its update is skipped (not an
+///   error) when `|acc| < gravity/4` (free fall); the very first sample must show gravity.
+/// - `mag`: magnetic field, any consistent unit (3 doubles), or `NULL` (6-D filter: no heading
+///   information). A zero field, a field along the vertical or a disturbed field is skipped.
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `gyr`, `acc`), `BINGHAM_ERR_INVALID_ARGUMENT`
+/// (NaN/Inf in a sample; a first sample without gravity), `BINGHAM_ERR_NOT_CONVERGED` /
+/// `BINGHAM_ERR_NUMERICAL` (internal). On error the AHRS is unchanged: the sample is refused.
+///
+/// # Safety
+/// `a`: a live handle; `gyr`, `acc`: 3 readable doubles each; `mag`: `NULL` or 3 readable
+/// doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_update(
+    a: *mut bingham_ahrs,
+    gyr: *const f64,
+    acc: *const f64,
+    mag: *const f64,
+) -> bingham_status {
+    guard("bingham_ahrs_update", || {
+        // SAFETY: caller contract.
+        let ahrs = unsafe { handle_mut("a", a)? };
+        need("gyr", gyr)?;
+        need("acc", acc)?;
+        let has_mag = optional("mag", mag)?;
+        // SAFETY: caller contract; 3 doubles each.
+        let (g, ac) = unsafe { (read("gyr", gyr, 3)?, read("acc", acc, 3)?) };
+        let m = if has_mag {
+            // SAFETY: caller contract.
+            Some(vec3(unsafe { read("mag", mag, 3)? }))
+        } else {
+            None
+        };
+        ahrs.inner.update(&vec3(g), &vec3(ac), m.as_ref())?;
+        Ok(())
+    })
+}
+
+fn vec3(s: &[f64]) -> [f64; 3] {
+    [s[0], s[1], s[2]]
+}
+
+/// Processes `n` samples and writes the orientation after each: as `n` calls of
+/// `bingham_ahrs_update()` followed by `bingham_ahrs_quaternion()`.
+///
+/// - `gyr`, `acc`: n×3 row-major; `mag`: n×3 row-major or `NULL`.
+/// - `quat`: n×4 row-major output (w, x, y, z per row, sensor → world ENU, w ≥ 0).
+///
+/// A refused sample (see `bingham_ahrs_update()`) stops the batch: the samples before it are
+/// processed and their rows of `quat` written, the rest untouched; the error message names the
+/// sample's index ("sample k: ..."). `n = 0` does nothing.
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT`, `BINGHAM_ERR_INVALID_DIMENSION` (n×4 overflows),
+/// those of `bingham_ahrs_update()`.
+///
+/// # Safety
+/// `a`: a live handle; `gyr`, `acc`: n*3 readable doubles; `mag`: `NULL` or n*3 readable
+/// doubles; `quat`: n*4 writable doubles, not overlapping the inputs.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_update_batch(
+    a: *mut bingham_ahrs,
+    n: usize,
+    gyr: *const f64,
+    acc: *const f64,
+    mag: *const f64,
+    quat: *mut f64,
+) -> bingham_status {
+    guard("bingham_ahrs_update_batch", || {
+        // SAFETY: forwarded caller contract.
+        unsafe { batch(a, n, gyr, acc, mag, quat, std::ptr::null_mut()) }
+    })
+}
+
+/// As `bingham_ahrs_update_batch()`, also writing the total angular spread (radians, see
+/// `bingham_ahrs_angular_spread()`) after each sample into `spread` (n doubles, or `NULL`).
+///
+/// # Safety
+/// As `bingham_ahrs_update_batch()`; `spread`: `NULL` or n writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_update_batch_spread(
+    a: *mut bingham_ahrs,
+    n: usize,
+    gyr: *const f64,
+    acc: *const f64,
+    mag: *const f64,
+    quat: *mut f64,
+    spread: *mut f64,
+) -> bingham_status {
+    guard("bingham_ahrs_update_batch_spread", || {
+        // SAFETY: forwarded caller contract.
+        unsafe { batch(a, n, gyr, acc, mag, quat, spread) }
+    })
+}
+
+unsafe fn batch(
+    a: *mut bingham_ahrs,
+    n: usize,
+    gyr: *const f64,
+    acc: *const f64,
+    mag: *const f64,
+    quat: *mut f64,
+    spread: *mut f64,
+) -> Result<(), Failure> {
+    // SAFETY: caller contract.
+    let ahrs = unsafe { handle_mut("a", a)? };
+    need("gyr", gyr)?;
+    need("acc", acc)?;
+    need("quat", quat)?;
+    let has_mag = optional("mag", mag)?;
+    let has_spread = optional("spread", spread)?;
+    let n3 = super::guard::len2("gyr", n, 3)?;
+    let n4 = super::guard::len2("quat", n, 4)?;
+    // SAFETY: caller contract: n*3 readable, n*4 (and n) writable doubles, not overlapping.
+    let (g, ac, m, q, s) = unsafe {
+        (
+            read_raw("gyr", gyr, n3)?,
+            read_raw("acc", acc, n3)?,
+            if has_mag {
+                Some(read_raw("mag", mag, n3)?)
+            } else {
+                None
+            },
+            output("quat", quat, n4)?,
+            if has_spread {
+                Some(output("spread", spread, n)?)
+            } else {
+                None
+            },
+        )
+    };
+    let mut s = s;
+    for k in 0..n {
+        let sample = |x: &[f64]| [x[3 * k], x[3 * k + 1], x[3 * k + 2]];
+        let mk = m.map(sample);
+        ahrs.inner
+            .update(&sample(g), &sample(ac), mk.as_ref())
+            .map_err(|e| Failure::from(e).context(format_args!("sample {k}")))?;
+        q[4 * k..4 * k + 4].copy_from_slice(&ahrs.inner.quaternion());
+        if let Some(s) = s.as_deref_mut() {
+            let mut out = [0.0; 4];
+            ahrs.inner
+                .angular_spread(&mut out)
+                .map_err(|e| Failure::from(e).context(format_args!("sample {k}")))?;
+            s[k] = out[3];
+        }
+    }
+    Ok(())
+}
+
+/// The current orientation estimate (the mode of the Bingham state): sensor → world (ENU),
+/// scalar first `(w, x, y, z)`, with w ≥ 0. Before the first sample: the identity.
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `q`). On error nothing is written.
+///
+/// # Safety
+/// `a`: a live handle; `q`: 4 writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_quaternion(
+    a: *const bingham_ahrs,
+    q: *mut f64,
+) -> bingham_status {
+    guard("bingham_ahrs_quaternion", || {
+        // SAFETY: caller contract.
+        let ahrs = unsafe { handle("a", a)? };
+        need("q", q)?;
+        // SAFETY: checked pointer; 4 doubles.
+        unsafe { write(q, &ahrs.inner.quaternion()) };
+        Ok(())
+    })
+}
+
+/// The Bingham state of the orientation: `m` 4×4 row-major (last column the mode), `z` 4
+/// concentrations ascending with `z[3] = 0`. Before the first sample: uniform (M = I, z = 0).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `m`, `z`). On error nothing is written.
+///
+/// # Safety
+/// `a`: a live handle; `m`: 16 and `z`: 4 writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_state(
+    a: *const bingham_ahrs,
+    m: *mut f64,
+    z: *mut f64,
+) -> bingham_status {
+    guard("bingham_ahrs_state", || {
+        // SAFETY: caller contract.
+        let ahrs = unsafe { handle("a", a)? };
+        need("m", m)?;
+        need("z", z)?;
+        let (mut mm, mut zz) = ([0.0; 16], [0.0; 4]);
+        ahrs.inner.state_into(&mut mm, &mut zz)?;
+        // SAFETY: checked pointers; 16 and 4 doubles.
+        unsafe {
+            write(m, &mm);
+            write(z, &zz);
+        }
+        Ok(())
+    })
+}
+
+/// The angular spread of the state (radians), as `bingham_angular_spread()`: `spread[0..3]`
+/// along the principal directions (columns 0..2 of the state's M), `spread[3]` the total (the
+/// RMS of `2 sin(θ/2)`, θ the rotation angle between the truth and the estimate under the
+/// state: ≈ the RMS angular error when the filter is calibrated).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `spread`). On error nothing is written.
+///
+/// # Safety
+/// `a`: a live handle; `spread`: 4 writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_angular_spread(
+    a: *const bingham_ahrs,
+    spread: *mut f64,
+) -> bingham_status {
+    guard("bingham_ahrs_angular_spread", || {
+        // SAFETY: caller contract.
+        let ahrs = unsafe { handle("a", a)? };
+        need("spread", spread)?;
+        let mut out = [0.0; 4];
+        ahrs.inner.angular_spread(&mut out)?;
+        // SAFETY: checked pointer; 4 doubles.
+        unsafe { write(spread, &out) };
+        Ok(())
+    })
+}
+
+/// The gyroscope bias estimate (rad/s, sensor frame), subtracted from the rates.
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `bias`). On error nothing is written.
+///
+/// # Safety
+/// `a`: a live handle; `bias`: 3 writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_gyro_bias(
+    a: *const bingham_ahrs,
+    bias: *mut f64,
+) -> bingham_status {
+    guard("bingham_ahrs_gyro_bias", || {
+        // SAFETY: caller contract.
+        let ahrs = unsafe { handle("a", a)? };
+        need("bias", bias)?;
+        // SAFETY: checked pointer; 3 doubles.
+        unsafe { write(bias, &ahrs.inner.gyro_bias()) };
+        Ok(())
+    })
+}
