@@ -103,13 +103,13 @@ impl AhrsParams {
     pub fn new(sample_time: f64) -> AhrsParams {
         AhrsParams {
             sample_time,
-            gyro_noise: 0.02,
-            acc_noise: 1.0,
+            gyro_noise: 0.008,
+            acc_noise: 0.4,
             acc_reject: 1.0,
             acc_tau: 3.0,
-            mag_tau: 3.0,
+            mag_tau: 9.0,
             gravity: 9.81,
-            mag_noise: 1.5,
+            mag_noise: 0.6,
             mag_norm_tol: 0.1,
             mag_dip_tol: 10f64.to_radians(),
             mag_ref_time: 20.0,
