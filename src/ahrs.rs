@@ -264,10 +264,10 @@ impl InertialLowPass {
     /// One sample (direct form II transposed).
     fn step(&mut self, x: &[f64; 3]) {
         let [b0, b1, b2, a1, a2] = self.coeff;
-        for i in 0..3 {
-            let y = b0 * x[i] + self.s0[i];
-            self.s0[i] = b1 * x[i] - a1 * y + self.s1[i];
-            self.s1[i] = b2 * x[i] - a2 * y;
+        for (i, &xi) in x.iter().enumerate() {
+            let y = b0 * xi + self.s0[i];
+            self.s0[i] = b1 * xi - a1 * y + self.s1[i];
+            self.s1[i] = b2 * xi - a2 * y;
             self.y[i] = y;
         }
     }
@@ -479,15 +479,15 @@ impl Ahrs {
         // accelerometer (disturbed samples are not fed to the filter).
         let mut mag_ref = self.mag.clone();
         let mut mag_filter = self.mag_filter.clone();
+        let mut heading_observed = false;
         if let Some(mf) = mag_filter.as_mut() {
             mf.turn(&dq);
         }
         if let Some(m) = mag {
             let q = f.mode4()?;
             if let Some(kappa) = self.magnetic_weight(&q, m, &mut mag_ref) {
-                let mf = mag_filter.get_or_insert_with(|| {
-                    InertialLowPass::new(butterworth(dt, p.mag_tau), m)
-                });
+                let mf = mag_filter
+                    .get_or_insert_with(|| InertialLowPass::new(butterworth(dt, p.mag_tau), m));
                 mf.step(m);
                 let mw = q4::rotate(&q, &mf.y);
                 let h = (mw[0] * mw[0] + mw[1] * mw[1]).sqrt();
@@ -497,6 +497,7 @@ impl Ahrs {
                     let rz = [(0.5 * delta).cos(), 0.0, 0.0, (0.5 * delta).sin()];
                     let q_m = q4::mul(&rz, &q);
                     f.update_exponent(&heading_exponent(&q_m, kappa))?;
+                    heading_observed = true;
                 }
             }
         }
@@ -504,7 +505,16 @@ impl Ahrs {
         // 5. Bias from the correction during motion (integral feedback).
         if p.bias_time > 0.0 && rest_timer < p.rest_time {
             let q_post = f.mode4()?;
-            let corr = q4::to_rotation_vector(&q4::mul(&q4::conj(&q_prior), &q_post));
+            let corr = if heading_observed {
+                q4::to_rotation_vector(&q4::mul(&q4::conj(&q_prior), &q_post))
+            } else {
+                // Without a heading observation the mode may slide along the unobserved
+                // rotation about the vertical (nearly equal concentrations): keep only the tilt
+                // correction, which such a slide leaves unchanged (body frame, small angles).
+                let up_prior = q4::rotate_inverse(&q_prior, &UP);
+                let up_post = q4::rotate_inverse(&q_post, &UP);
+                cross3(&up_post, &up_prior)
+            };
             for i in 0..3 {
                 bias[i] -= corr[i] / p.bias_time;
             }
@@ -616,7 +626,8 @@ impl Ahrs {
         self.gyr_lp = *gyr;
         self.acc_lp = *acc;
         self.acc_filter = InertialLowPass::new(butterworth(p.sample_time, p.acc_tau), acc);
-        self.mag_filter = mag.map(|m| InertialLowPass::new(butterworth(p.sample_time, p.mag_tau), m));
+        self.mag_filter =
+            mag.map(|m| InertialLowPass::new(butterworth(p.sample_time, p.mag_tau), m));
         self.mag = mag_ref;
         self.samples = 1;
         Ok(())

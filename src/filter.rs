@@ -218,7 +218,12 @@ impl BinghamFilter {
     /// (d = 4): `log ∫ f(q) C(κ) exp(κ rᵀ R(q) b) dq` with `C(κ) = κ / (4π sinh κ)`. Use it for
     /// gating (an outlier has a small value) and to adapt `kappa`. The filter is not changed.
     /// Arguments and errors as for [`BinghamFilter::update_vector`].
-    pub fn log_likelihood_vector(&self, body: &[f64], reference: &[f64], kappa: f64) -> Result<f64> {
+    pub fn log_likelihood_vector(
+        &self,
+        body: &[f64],
+        reference: &[f64],
+        kappa: f64,
+    ) -> Result<f64> {
         let p = vector_exponent(body, reference, kappa)?;
         let c = self.core4()?;
         Ok(c.log_likelihood_precision(&p)? + crate::observation::log_vmf_normalizer_s2(kappa))

@@ -1,6 +1,6 @@
 //! After warm-up, filter steps perform no heap allocation at all: a counting global allocator
 //! (this test binary only) sees zero allocations over many predict + update steps, through the
-//! Rust API and through the C API.
+//! Rust API and through the C API, over vector-observation updates, and over AHRS samples.
 
 mod filter_common;
 
@@ -54,6 +54,95 @@ fn filter_steps_do_not_allocate() {
         rust_api(&sc);
         c_api(&sc);
     }
+    vector_updates();
+    ahrs_steps();
+}
+
+/// `update_vector`, `log_likelihood_vector` and `angular_spread_into` after a predict.
+fn vector_updates() {
+    let sc = scenario_4d();
+    let mut f = BinghamFilter::new(4, &sc.m0, &sc.z0).unwrap();
+    let dirs: Vec<[f64; 3]> = (0..200)
+        .map(|k| {
+            let t = k as f64 * 0.1;
+            let v = [t.cos(), t.sin(), 0.3 * (0.7 * t).cos()];
+            let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            [v[0] / n, v[1] / n, v[2] / n]
+        })
+        .collect();
+    let refs = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0]];
+    f.predict(&sc.mw, &sc.zw).unwrap();
+    f.update_vector(&dirs[0], &refs[0], 5.0).unwrap();
+    let mut spread = [0.0; 4];
+    let before = allocations();
+    let mut ll = 0.0;
+    for (k, b) in dirs.iter().enumerate() {
+        let r = &refs[k % 2];
+        f.predict(&sc.mw, &sc.zw).unwrap();
+        ll += f.log_likelihood_vector(b, r, 5.0).unwrap();
+        f.update_vector(b, r, 5.0).unwrap();
+        f.angular_spread_into(&mut spread).unwrap();
+    }
+    let n = allocations() - before;
+    assert!(ll.is_finite());
+    assert_eq!(n, 0, "{n} allocations in {} vector updates", dirs.len());
+    println!("{} vector updates: 0 allocations", dirs.len());
+}
+
+/// 1000 AHRS samples (gyroscope, accelerometer, magnetometer; some with a disturbed field, some
+/// without magnetometer, a short free fall) after a few samples of warm-up.
+fn ahrs_steps() {
+    use bingham::ahrs::{Ahrs, AhrsParams};
+    use bingham::quaternion::q4;
+    let dt = 0.01;
+    let n = 1010;
+    let mut q = [1.0, 0.0, 0.0, 0.0];
+    let mut samples = Vec::with_capacity(n);
+    for k in 0..n {
+        let t = k as f64 * dt;
+        let w = [0.5 * t.sin(), 0.4 * (0.7 * t).cos(), 0.3];
+        q = q4::mul(
+            &q,
+            &q4::from_rotation_vector(&[w[0] * dt, w[1] * dt, w[2] * dt]),
+        );
+        let mut acc = q4::rotate_inverse(&q, &[0.0, 0.0, 9.81]);
+        if (600..620).contains(&k) {
+            acc = [0.0; 3]; // free fall
+        }
+        let scale = if (400..450).contains(&k) { 1.6 } else { 1.0 };
+        let mag = q4::rotate_inverse(&q, &[0.0, 20.0 * scale, -40.0 * scale]);
+        let gyr = [w[0] + 0.01, w[1] - 0.01, w[2] + 0.005];
+        samples.push((gyr, acc, mag));
+    }
+    let mut a = Ahrs::new(&AhrsParams::new(dt)).unwrap();
+    for (gyr, acc, mag) in &samples[..10] {
+        a.update(gyr, acc, Some(mag)).unwrap();
+    }
+    let mut m = [0.0; 16];
+    let mut z = [0.0; 4];
+    let mut spread = [0.0; 4];
+    let mut sum = 0.0;
+    let before = allocations();
+    for (k, (gyr, acc, mag)) in samples[10..].iter().enumerate() {
+        let mag = if (700..720).contains(&k) {
+            None
+        } else {
+            Some(mag)
+        };
+        a.update(gyr, acc, mag).unwrap();
+        sum += a.quaternion()[0] + a.gyro_bias()[0];
+        a.state_into(&mut m, &mut z).unwrap();
+        a.angular_spread(&mut spread).unwrap();
+    }
+    let n = allocations() - before;
+    assert!(sum.is_finite());
+    assert_eq!(
+        n,
+        0,
+        "{n} allocations in {} AHRS samples",
+        samples.len() - 10
+    );
+    println!("{} AHRS samples: 0 allocations", samples.len() - 10);
 }
 
 fn rust_api(sc: &Scenario) {

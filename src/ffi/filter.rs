@@ -402,39 +402,6 @@ pub unsafe extern "C" fn bingham_filter_log_likelihood(
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::filter::MAX_CONCENTRATION;
-
-    #[test]
-    fn max_concentration_matches_core() {
-        assert_eq!(BINGHAM_FILTER_MAX_CONCENTRATION, MAX_CONCENTRATION);
-    }
-
-    #[test]
-    fn handle_lifecycle() {
-        let m = [1.0, 0.0, 0.0, 1.0];
-        let z = [-1.0, 0.0];
-        let mut f: *mut bingham_filter = std::ptr::null_mut();
-        let mut g: *mut bingham_filter = std::ptr::null_mut();
-        let mut d = 0usize;
-        // SAFETY: valid arrays and out-pointers; handles freed once.
-        unsafe {
-            assert_eq!(
-                bingham_filter_new(2, m.as_ptr(), z.as_ptr(), &mut f),
-                bingham_status::BINGHAM_OK
-            );
-            assert_eq!(bingham_filter_clone(f, &mut g), bingham_status::BINGHAM_OK);
-            assert_eq!(bingham_filter_dim(g, &mut d), bingham_status::BINGHAM_OK);
-            assert_eq!(d, 2);
-            bingham_filter_free(f);
-            bingham_filter_free(g);
-            bingham_filter_free(std::ptr::null_mut());
-        }
-    }
-}
-
 /// Measurement update with a measured direction (d = 4 filters): `body` (sensor frame) is a
 /// noisy measurement of the known world direction `reference`, with von Mises–Fisher noise of
 /// concentration `kappa` (see `bingham_vector_observation()`; the filter's quaternion maps
@@ -531,4 +498,37 @@ pub unsafe extern "C" fn bingham_filter_angular_spread(
         unsafe { write(spread, &out[..d]) };
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::filter::MAX_CONCENTRATION;
+
+    #[test]
+    fn max_concentration_matches_core() {
+        assert_eq!(BINGHAM_FILTER_MAX_CONCENTRATION, MAX_CONCENTRATION);
+    }
+
+    #[test]
+    fn handle_lifecycle() {
+        let m = [1.0, 0.0, 0.0, 1.0];
+        let z = [-1.0, 0.0];
+        let mut f: *mut bingham_filter = std::ptr::null_mut();
+        let mut g: *mut bingham_filter = std::ptr::null_mut();
+        let mut d = 0usize;
+        // SAFETY: valid arrays and out-pointers; handles freed once.
+        unsafe {
+            assert_eq!(
+                bingham_filter_new(2, m.as_ptr(), z.as_ptr(), &mut f),
+                bingham_status::BINGHAM_OK
+            );
+            assert_eq!(bingham_filter_clone(f, &mut g), bingham_status::BINGHAM_OK);
+            assert_eq!(bingham_filter_dim(g, &mut d), bingham_status::BINGHAM_OK);
+            assert_eq!(d, 2);
+            bingham_filter_free(f);
+            bingham_filter_free(g);
+            bingham_filter_free(std::ptr::null_mut());
+        }
+    }
 }

@@ -1,0 +1,139 @@
+//! The AHRS and the vector-observation helpers (criterion).
+//!
+//! The AHRS runs on a pre-generated simulated IMU stream at 100 Hz (smooth motion, gyroscope
+//! bias and noise, accelerometer and magnetometer with noise), cycled: one sample per
+//! iteration, so the state stays in its normal operating range.
+
+use bingham::ahrs::{Ahrs, AhrsParams};
+use bingham::filter::BinghamFilter;
+use bingham::observation::{noise_from_angle_std, vector_observation};
+use bingham::quaternion::q4;
+use criterion::{black_box, criterion_group, criterion_main, Criterion};
+
+const DT: f64 = 0.01;
+
+struct Sample {
+    gyr: [f64; 3],
+    acc: [f64; 3],
+    mag: [f64; 3],
+}
+
+/// A deterministic pseudo-random generator (SplitMix64) with Gaussian draws.
+struct Rng(u64);
+
+impl Rng {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn normal(&mut self) -> f64 {
+        let u1 = 1.0 - self.uniform();
+        let u2 = self.uniform();
+        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+    }
+}
+
+/// 60 s of simulated IMU data.
+fn stream() -> Vec<Sample> {
+    let mut rng = Rng(7);
+    let mut q = [1.0, 0.0, 0.0, 0.0];
+    let bias = [0.008, -0.008, 0.008];
+    (0..6000)
+        .map(|k| {
+            let t = k as f64 * DT;
+            let w = [
+                0.9 * (0.7 * t).sin() + 0.3 * (5.2 * t).sin(),
+                0.7 * (0.4 * t + 1.0).sin() + 0.25 * (3.8 * t).cos(),
+                1.2 * (0.3 * t + 0.5).sin(),
+            ];
+            q = q4::mul(
+                &q,
+                &q4::from_rotation_vector(&[w[0] * DT, w[1] * DT, w[2] * DT]),
+            );
+            let a = q4::rotate_inverse(&q, &[0.0, 0.0, 9.81]);
+            let m = q4::rotate_inverse(&q, &[0.0, 20.0, -40.0]);
+            let gyr = [0, 1, 2].map(|i| w[i] + bias[i] + 0.005 * rng.normal());
+            let acc = [0, 1, 2].map(|i| a[i] + 0.05 * rng.normal());
+            let mag = [0, 1, 2].map(|i| m[i] + 0.5 * rng.normal());
+            Sample { gyr, acc, mag }
+        })
+        .collect()
+}
+
+fn bench_ahrs(c: &mut Criterion) {
+    let data = stream();
+    let params = AhrsParams::new(DT);
+    let mut g = c.benchmark_group("ahrs");
+    for (name, with_mag) in [
+        ("ahrs_update_gyr_acc_mag", true),
+        ("ahrs_update_gyr_acc", false),
+    ] {
+        let mut a = Ahrs::new(&params).unwrap();
+        let mut k = 0usize;
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let s = &data[k % data.len()];
+                k += 1;
+                let mag = with_mag.then_some(&s.mag);
+                a.update(black_box(&s.gyr), black_box(&s.acc), black_box(mag))
+                    .unwrap();
+            })
+        });
+    }
+    g.finish();
+}
+
+fn bench_vector(c: &mut Criterion) {
+    let mut g = c.benchmark_group("vector");
+    let dirs: Vec<[f64; 3]> = stream()
+        .iter()
+        .take(1000)
+        .map(|s| {
+            let n = (s.acc[0] * s.acc[0] + s.acc[1] * s.acc[1] + s.acc[2] * s.acc[2]).sqrt();
+            [s.acc[0] / n, s.acc[1] / n, s.acc[2] / n]
+        })
+        .collect();
+    let up = [0.0, 0.0, 1.0];
+    let id = [
+        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+    ];
+    let fresh = || BinghamFilter::new(4, &id, &[-50.0, -50.0, -50.0, 0.0]).unwrap();
+    let mut f = fresh();
+    let mut k = 0usize;
+    g.bench_function("filter_update_vector", |b| {
+        b.iter(|| {
+            // Restart now and then: without predictions the state only sharpens.
+            if k % 100 == 0 {
+                f = fresh();
+            }
+            let d = &dirs[k % dirs.len()];
+            k += 1;
+            f.update_vector(black_box(d), black_box(&up), black_box(3.0))
+                .unwrap();
+        })
+    });
+    let mut k = 0usize;
+    g.bench_function("vector_observation", |b| {
+        b.iter(|| {
+            let d = &dirs[k % dirs.len()];
+            k += 1;
+            vector_observation(black_box(d), black_box(&up), black_box(3.0)).unwrap()
+        })
+    });
+    g.bench_function("noise_from_angle_std", |b| {
+        b.iter(|| noise_from_angle_std(black_box(4), black_box(0.01)).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default()
+        .warm_up_time(std::time::Duration::from_millis(500))
+        .measurement_time(std::time::Duration::from_secs(3));
+    targets = bench_ahrs, bench_vector
+}
+criterion_main!(benches);

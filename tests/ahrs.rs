@@ -1,0 +1,634 @@
+//! The AHRS on a simulated IMU: a known smooth motion (body rate a sum of sinusoids, integrated
+//! finely), gyroscope with bias and white noise, accelerometer (gravity, noise and bursts of
+//! linear acceleration), magnetometer (a dipping field with noise). Checks accuracy, bias
+//! estimation, heading observability, initialization, and that refused samples change nothing.
+//!
+//! Parameters are `AhrsParams::new(dt)` defaults throughout; the bounds carry a margin of at
+//! least 2× over what was measured when the test was written (printed with `--nocapture`).
+
+mod common;
+
+use bingham::ahrs::{Ahrs, AhrsParams};
+use bingham::Error;
+use common::Rng64;
+use std::f64::consts::PI;
+
+const G: f64 = 9.81;
+/// The magnetic field in the world frame (ENU, µT): north and down.
+const FIELD: [f64; 3] = [0.0, 20.0, -40.0];
+const BIAS_DEG: f64 = 0.5;
+
+// ---------------------------------------------------------------------------------------------
+// Quaternion helpers written here (independent of the crate's `q4`).
+
+fn qmul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}
+
+fn qexp(w: &[f64; 3]) -> [f64; 4] {
+    let th = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+    if th == 0.0 {
+        return [1.0, 0.0, 0.0, 0.0];
+    }
+    let s = (0.5 * th).sin() / th;
+    [(0.5 * th).cos(), s * w[0], s * w[1], s * w[2]]
+}
+
+fn normalize4(q: &[f64; 4]) -> [f64; 4] {
+    let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    [q[0] / n, q[1] / n, q[2] / n, q[3] / n]
+}
+
+/// `R(q)` (sensor → world), textbook formula.
+fn rot(q: &[f64; 4]) -> [[f64; 3]; 3] {
+    let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - w * z),
+            2.0 * (x * z + w * y),
+        ],
+        [
+            2.0 * (x * y + w * z),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - w * x),
+        ],
+        [
+            2.0 * (x * z - w * y),
+            2.0 * (y * z + w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
+}
+
+/// `R(q)ᵀ v` (world → sensor).
+fn to_sensor(q: &[f64; 4], v: &[f64; 3]) -> [f64; 3] {
+    let r = rot(q);
+    [
+        r[0][0] * v[0] + r[1][0] * v[1] + r[2][0] * v[2],
+        r[0][1] * v[0] + r[1][1] * v[1] + r[2][1] * v[2],
+        r[0][2] * v[0] + r[1][2] * v[1] + r[2][2] * v[2],
+    ]
+}
+
+/// The rotation angle between two orientations, `2 acos |⟨a, b⟩|`.
+fn angle(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+    let d = a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>().abs();
+    2.0 * d.min(1.0).acos()
+}
+
+/// The angle between the two estimates of "up" in the sensor frame (the tilt error).
+fn tilt_error(a: &[f64; 4], b: &[f64; 4]) -> f64 {
+    let (ua, ub) = (
+        to_sensor(a, &[0.0, 0.0, 1.0]),
+        to_sensor(b, &[0.0, 0.0, 1.0]),
+    );
+    let c = ua[0] * ub[0] + ua[1] * ub[1] + ua[2] * ub[2];
+    c.clamp(-1.0, 1.0).acos()
+}
+
+fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+// ---------------------------------------------------------------------------------------------
+// The simulated IMU
+
+struct Config {
+    /// Sample rate (Hz).
+    rate: f64,
+    /// Total duration (s).
+    duration: f64,
+    /// The sensor is still until this time (s); the motion ramps in over 2 s after it.
+    rest: f64,
+    /// Windows `(start, length)` (s) of horizontal linear acceleration (4 m/s²).
+    bursts: Vec<(f64, f64)>,
+    /// A window `(start, length)` (s) of free fall (specific force zero, noise only).
+    free_fall: Option<(f64, f64)>,
+    seed: u64,
+}
+
+impl Config {
+    fn standard(seed: u64) -> Config {
+        Config {
+            rate: 100.0,
+            duration: 70.0,
+            rest: 10.0,
+            bursts: vec![(22.0, 0.5), (37.0, 0.3), (51.0, 0.6)],
+            free_fall: None,
+            seed,
+        }
+    }
+}
+
+struct Stream {
+    dt: f64,
+    truth: Vec<[f64; 4]>,
+    gyr: Vec<[f64; 3]>,
+    acc: Vec<[f64; 3]>,
+    mag: Vec<[f64; 3]>,
+    bias: [f64; 3],
+}
+
+/// The true body rate (rad/s) at time `t`: zero during the rest phase, then a sum of
+/// sinusoids per axis ramped in smoothly.
+fn body_rate(t: f64, rest: f64) -> [f64; 3] {
+    if t <= rest {
+        return [0.0; 3];
+    }
+    let s = ((t - rest) / 2.0).min(1.0);
+    let ramp = s * s * (3.0 - 2.0 * s);
+    let terms: [[(f64, f64, f64); 3]; 3] = [
+        [(0.9, 0.11, 0.3), (0.5, 0.37, 1.1), (0.3, 0.83, 2.0)],
+        [(0.7, 0.07, 1.7), (0.6, 0.29, 0.4), (0.25, 0.61, 2.9)],
+        [(1.2, 0.05, 0.9), (0.4, 0.23, 2.3), (0.35, 0.71, 0.2)],
+    ];
+    let mut w = [0.0; 3];
+    for (i, axis) in terms.iter().enumerate() {
+        for &(a, f, p) in axis {
+            w[i] += a * (2.0 * PI * f * (t - rest) + p).sin();
+        }
+        w[i] *= ramp;
+    }
+    w
+}
+
+fn simulate(c: &Config) -> Stream {
+    let dt = 1.0 / c.rate;
+    let n = (c.duration * c.rate).round() as usize;
+    let mut rng = Rng64(c.seed);
+    let bias = [
+        BIAS_DEG.to_radians(),
+        -BIAS_DEG.to_radians(),
+        BIAS_DEG.to_radians(),
+    ];
+    let (gyro_sd, acc_sd, mag_sd) = (0.3f64.to_radians(), 0.05, 0.5);
+    // Roll 10°, pitch −20°, yaw 40° (world from sensor).
+    let mut q = qmul(
+        &qexp(&[0.0, 0.0, 40f64.to_radians()]),
+        &qmul(
+            &qexp(&[0.0, -20f64.to_radians(), 0.0]),
+            &qexp(&[10f64.to_radians(), 0.0, 0.0]),
+        ),
+    );
+    let sub = 10;
+    let h = dt / sub as f64;
+    let mut s = Stream {
+        dt,
+        truth: Vec::with_capacity(n),
+        gyr: Vec::with_capacity(n),
+        acc: Vec::with_capacity(n),
+        mag: Vec::with_capacity(n),
+        bias,
+    };
+    for k in 0..n {
+        let t = k as f64 * dt;
+        if k > 0 {
+            // The interval (t − dt, t], integrated in body-frame substeps at their midpoints.
+            for j in 0..sub {
+                let tm = t - dt + (j as f64 + 0.5) * h;
+                let w = body_rate(tm, c.rest);
+                q = normalize4(&qmul(&q, &qexp(&[w[0] * h, w[1] * h, w[2] * h])));
+            }
+        }
+        let w = if k > 0 {
+            body_rate(t - 0.5 * dt, c.rest)
+        } else {
+            [0.0; 3]
+        };
+        let gyr = [
+            w[0] + bias[0] + gyro_sd * rng.normal(),
+            w[1] + bias[1] + gyro_sd * rng.normal(),
+            w[2] + bias[2] + gyro_sd * rng.normal(),
+        ];
+        let mut f_world = [0.0, 0.0, G];
+        for &(start, len) in &c.bursts {
+            if t >= start && t < start + len {
+                f_world[0] += 4.0 * (0.7 * t).cos();
+                f_world[1] += 4.0 * (0.7 * t).sin();
+            }
+        }
+        if let Some((start, len)) = c.free_fall {
+            if t >= start && t < start + len {
+                f_world = [0.0; 3];
+            }
+        }
+        let a = to_sensor(&q, &f_world);
+        let acc = [
+            a[0] + acc_sd * rng.normal(),
+            a[1] + acc_sd * rng.normal(),
+            a[2] + acc_sd * rng.normal(),
+        ];
+        let m = to_sensor(&q, &FIELD);
+        let mag = [
+            m[0] + mag_sd * rng.normal(),
+            m[1] + mag_sd * rng.normal(),
+            m[2] + mag_sd * rng.normal(),
+        ];
+        s.truth.push(q);
+        s.gyr.push(gyr);
+        s.acc.push(acc);
+        s.mag.push(mag);
+    }
+    s
+}
+
+struct Run {
+    est: Vec<[f64; 4]>,
+    spread: Vec<f64>,
+    ahrs: Ahrs,
+}
+
+fn run(s: &Stream, with_mag: bool) -> Run {
+    let mut ahrs = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
+    let mut est = Vec::with_capacity(s.truth.len());
+    let mut spread = Vec::with_capacity(s.truth.len());
+    for k in 0..s.truth.len() {
+        let mag = with_mag.then_some(&s.mag[k]);
+        ahrs.update(&s.gyr[k], &s.acc[k], mag).unwrap();
+        est.push(ahrs.quaternion());
+        let mut out = [0.0; 4];
+        ahrs.angular_spread(&mut out).unwrap();
+        spread.push(out[3]);
+    }
+    Run { est, spread, ahrs }
+}
+
+/// Errors (rad) from sample `from` on: total angle and tilt.
+fn errors(s: &Stream, r: &Run, from: usize) -> (Vec<f64>, Vec<f64>) {
+    let total = (from..s.truth.len())
+        .map(|k| angle(&r.est[k], &s.truth[k]))
+        .collect();
+    let tilt = (from..s.truth.len())
+        .map(|k| tilt_error(&r.est[k], &s.truth[k]))
+        .collect();
+    (total, tilt)
+}
+
+fn is_invalid_argument(r: &Result<(), Error>) -> bool {
+    matches!(r, Err(Error::InvalidArgument(_)))
+}
+
+/// Everything observable of an AHRS, as bits.
+fn snapshot(a: &Ahrs) -> Vec<u64> {
+    let (mut m, mut z) = ([0.0; 16], [0.0; 4]);
+    a.state_into(&mut m, &mut z).unwrap();
+    let mut spread = [0.0; 4];
+    a.angular_spread(&mut spread).unwrap();
+    a.quaternion()
+        .iter()
+        .chain(&m)
+        .chain(&z)
+        .chain(&a.gyro_bias())
+        .chain(&spread)
+        .map(|v| v.to_bits())
+        .chain([a.samples(), a.is_initialized() as u64])
+        .collect()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Accuracy
+
+#[test]
+fn tracks_the_simulated_motion() {
+    let s = simulate(&Config::standard(1));
+    let r = run(&s, true);
+    let settle = (15.0 / s.dt) as usize;
+    let (total, tilt) = errors(&s, &r, settle);
+    let (e_rms, e_max) = (rms(&total), total.iter().fold(0.0f64, |a, &b| a.max(b)));
+    let t_rms = rms(&tilt);
+    let spread_rms = rms(&r.spread[settle..]);
+    println!(
+        "with magnetometer (t > 15 s): angle error RMS {:.3}°, max {:.3}°; tilt RMS {:.3}°; \
+         reported spread RMS {:.3}°",
+        e_rms.to_degrees(),
+        e_max.to_degrees(),
+        t_rms.to_degrees(),
+        spread_rms.to_degrees()
+    );
+    assert!(e_rms.to_degrees() < 2.0, "RMS {}°", e_rms.to_degrees());
+    assert!(e_max.to_degrees() < 5.0, "max {}°", e_max.to_degrees());
+    assert!(t_rms.to_degrees() < 1.5, "tilt RMS {}°", t_rms.to_degrees());
+    // With a magnetometer the heading is observed: the reported spread is small.
+    assert!(
+        spread_rms.to_degrees() < 10.0,
+        "spread {}°",
+        spread_rms.to_degrees()
+    );
+    // During the rest phase the estimate is steady and accurate.
+    let (rest_err, _) = errors(&s, &r, (5.0 / s.dt) as usize);
+    let rest_rms = rms(&rest_err[..(5.0 / s.dt) as usize]);
+    println!(
+        "rest phase 5–10 s: angle error RMS {:.3}°",
+        rest_rms.to_degrees()
+    );
+    assert!(rest_rms.to_degrees() < 3.0);
+}
+
+#[test]
+fn initializes_from_the_first_sample() {
+    for seed in 0..5 {
+        let s = simulate(&Config::standard(100 + seed));
+        let mut a = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
+        assert!(!a.is_initialized());
+        assert_eq!(a.quaternion(), [1.0, 0.0, 0.0, 0.0]);
+        a.update(&s.gyr[0], &s.acc[0], Some(&s.mag[0])).unwrap();
+        assert!(a.is_initialized());
+        assert_eq!(a.samples(), 1);
+        let e = angle(&a.quaternion(), &s.truth[0]).to_degrees();
+        let mut spread = [0.0; 4];
+        a.angular_spread(&mut spread).unwrap();
+        println!(
+            "seed {seed}: first-sample error {e:.3}°, reported spread {:.2}°",
+            spread[3].to_degrees()
+        );
+        assert!(e < 5.0, "{e}°");
+        // Without a magnetometer: the tilt is right, the heading unknown.
+        let mut b = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
+        b.update(&s.gyr[0], &s.acc[0], None).unwrap();
+        let t = tilt_error(&b.quaternion(), &s.truth[0]).to_degrees();
+        b.angular_spread(&mut spread).unwrap();
+        println!("seed {seed}: first-sample tilt error without magnetometer {t:.3}°");
+        assert!(t < 3.0, "tilt {t}°");
+        assert!(spread[3].to_degrees() > 30.0, "{:?}", spread);
+    }
+}
+
+#[test]
+fn estimates_the_gyro_bias() {
+    let s = simulate(&Config::standard(2));
+    let r = run(&s, true);
+    let est = r.ahrs.gyro_bias();
+    let err: Vec<f64> = (0..3).map(|i| (est[i] - s.bias[i]).to_degrees()).collect();
+    println!(
+        "true bias {:.3?}°/s, estimate {:.3?}°/s, error {:.4?}°/s",
+        s.bias.map(f64::to_degrees),
+        est.map(f64::to_degrees),
+        err
+    );
+    for e in &err {
+        assert!(e.abs() < 0.5 * BIAS_DEG, "bias error {e}°/s");
+    }
+    // After the rest phase alone (10 s), the bias is already known.
+    let mut a = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
+    for k in 0..(10.0 / s.dt) as usize {
+        a.update(&s.gyr[k], &s.acc[k], Some(&s.mag[k])).unwrap();
+    }
+    let b = a.gyro_bias();
+    let err: Vec<f64> = (0..3).map(|i| (b[i] - s.bias[i]).to_degrees()).collect();
+    println!("after the 10 s rest: error {err:.4?}°/s");
+    for e in &err {
+        assert!(e.abs() < 0.25 * BIAS_DEG, "bias error at rest {e}°/s");
+    }
+}
+
+#[test]
+fn without_magnetometer_the_heading_is_uncertain() {
+    let s = simulate(&Config::standard(3));
+    let r = run(&s, false);
+    let settle = (15.0 / s.dt) as usize;
+    let (_, tilt) = errors(&s, &r, settle);
+    let t_rms = rms(&tilt);
+    let min_spread = r.spread[settle..]
+        .iter()
+        .fold(f64::INFINITY, |a, &b| a.min(b));
+    println!(
+        "without magnetometer: tilt error RMS {:.3}°, max {:.3}°; smallest reported spread {:.1}°",
+        t_rms.to_degrees(),
+        tilt.iter().fold(0.0f64, |a, &b| a.max(b)).to_degrees(),
+        min_spread.to_degrees()
+    );
+    // The heading is unobserved, the tilt and the gyroscope bias are not: the bias estimate
+    // must not absorb the mode's slides along the unobserved rotation about the vertical.
+    let est = r.ahrs.gyro_bias();
+    let err: Vec<f64> = (0..3).map(|i| (est[i] - s.bias[i]).to_degrees()).collect();
+    println!("without magnetometer: bias error {err:.4?}°/s");
+    for e in &err {
+        assert!(e.abs() < 0.5 * BIAS_DEG, "bias error {e}°/s");
+    }
+    assert!(t_rms.to_degrees() < 1.5, "tilt RMS {}°", t_rms.to_degrees());
+    assert!(
+        min_spread.to_degrees() > 30.0,
+        "spread {}°",
+        min_spread.to_degrees()
+    );
+    let with = run(&s, true);
+    let max_with = with.spread[settle..].iter().fold(0.0f64, |a, &b| a.max(b));
+    assert!(max_with.to_degrees() < 10.0, "{}°", max_with.to_degrees());
+}
+
+#[test]
+fn free_fall_is_skipped() {
+    let mut c = Config::standard(4);
+    c.free_fall = Some((30.0, 0.5));
+    c.duration = 40.0;
+    let s = simulate(&c);
+    let r = run(&s, true); // no sample refused
+    let k0 = (30.0 / s.dt) as usize;
+    let (total, _) = errors(&s, &r, k0);
+    let worst = total.iter().fold(0.0f64, |a, &b| a.max(b)).to_degrees();
+    println!("free fall at 30 s: largest angle error after it {worst:.3}°");
+    assert!(worst < 5.0, "{worst}°");
+    assert_eq!(r.ahrs.samples(), s.truth.len() as u64);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Refused samples and the batch interface
+
+#[test]
+fn refused_samples_change_nothing() {
+    let s = simulate(&Config::standard(5));
+    let mut a = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
+    // Before initialization, too.
+    let fresh = snapshot(&a);
+    assert!(is_invalid_argument(&a.update(
+        &[f64::NAN, 0.0, 0.0],
+        &s.acc[0],
+        None
+    )));
+    assert_eq!(snapshot(&a), fresh);
+    for k in 0..1500 {
+        a.update(&s.gyr[k], &s.acc[k], Some(&s.mag[k])).unwrap();
+    }
+    let reference = a.clone();
+    let before = snapshot(&a);
+    let (g, ac, m) = (s.gyr[1500], s.acc[1500], s.mag[1500]);
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        for i in 0..3 {
+            let mut gb = g;
+            gb[i] = bad;
+            assert!(is_invalid_argument(&a.update(&gb, &ac, Some(&m))));
+            let mut abad = ac;
+            abad[i] = bad;
+            assert!(is_invalid_argument(&a.update(&g, &abad, Some(&m))));
+            assert!(is_invalid_argument(&a.update(&g, &abad, None)));
+            let mut mb = m;
+            mb[i] = bad;
+            assert!(is_invalid_argument(&a.update(&g, &ac, Some(&mb))));
+            assert_eq!(snapshot(&a), before, "a refused sample changed the AHRS");
+        }
+    }
+    // Hidden state (filters, rest timer, magnetic reference) unchanged too: the refused
+    // samples leave no trace in what follows.
+    let mut b = reference;
+    for k in 1500..2000 {
+        a.update(&s.gyr[k], &s.acc[k], Some(&s.mag[k])).unwrap();
+        b.update(&s.gyr[k], &s.acc[k], Some(&s.mag[k])).unwrap();
+        assert_eq!(snapshot(&a), snapshot(&b), "diverged at sample {k}");
+    }
+}
+
+#[test]
+fn first_sample_needs_gravity() {
+    let p = AhrsParams::new(0.01);
+    let mut a = Ahrs::new(&p).unwrap();
+    let fresh = snapshot(&a);
+    for acc in [[0.0; 3], [0.1, -0.2, 0.3], [0.0, 0.0, 0.2 * G]] {
+        assert!(is_invalid_argument(&a.update(&[0.0; 3], &acc, None)));
+        assert!(is_invalid_argument(&a.update(
+            &[0.0; 3],
+            &acc,
+            Some(&[0.0, 20.0, -40.0])
+        )));
+        assert_eq!(snapshot(&a), fresh);
+        assert!(!a.is_initialized());
+        assert_eq!(a.samples(), 0);
+    }
+    // Before the first sample: identity and the uniform state.
+    let (mut m, mut z) = ([9.0; 16], [9.0; 4]);
+    a.state_into(&mut m, &mut z).unwrap();
+    for (k, v) in m.iter().enumerate() {
+        assert_eq!(*v, if k % 5 == 0 { 1.0 } else { 0.0 });
+    }
+    assert_eq!(z, [0.0; 4]);
+    assert!(matches!(
+        a.state_into(&mut [0.0; 15], &mut z),
+        Err(Error::InvalidDimension(_))
+    ));
+    // A usable sample then initializes it (a zero magnetometer is ignored).
+    a.update(&[0.0; 3], &[0.0, 0.0, G], Some(&[0.0; 3]))
+        .unwrap();
+    assert!(a.is_initialized());
+    assert_eq!(a.samples(), 1);
+}
+
+#[test]
+fn batch_stops_at_the_first_refused_sample() {
+    let s = simulate(&Config {
+        duration: 3.0,
+        ..Config::standard(6)
+    });
+    let n = s.truth.len();
+    let bad_at = 120;
+    let mut acc = s.acc.clone();
+    acc[bad_at][1] = f64::NAN;
+    let mut a = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
+    let mut quat = vec![[7.0; 4]; n];
+    let mut spread = vec![7.0; n];
+    let r = a.update_batch(&s.gyr, &acc, Some(&s.mag), &mut quat, Some(&mut spread));
+    match r {
+        Err(Error::InvalidArgument(msg)) => {
+            assert!(msg.contains(&format!("sample {bad_at}")), "message: {msg}")
+        }
+        other => panic!("expected InvalidArgument, got {other:?}"),
+    }
+    assert_eq!(a.samples(), bad_at as u64);
+    // The rows before it equal one-by-one updates, bit for bit; the rest are untouched.
+    let mut b = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
+    for k in 0..bad_at {
+        b.update(&s.gyr[k], &acc[k], Some(&s.mag[k])).unwrap();
+        assert_eq!(quat[k].map(f64::to_bits), b.quaternion().map(f64::to_bits));
+        let mut out = [0.0; 4];
+        b.angular_spread(&mut out).unwrap();
+        assert_eq!(spread[k].to_bits(), out[3].to_bits());
+    }
+    assert_eq!(snapshot(&a), snapshot(&b));
+    assert!(quat[bad_at..].iter().all(|q| *q == [7.0; 4]));
+    assert!(spread[bad_at..].iter().all(|v| *v == 7.0));
+
+    // A whole batch without magnetometer and spread equals one-by-one updates.
+    let mut c = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
+    let mut d = c.clone();
+    c.update_batch(&s.gyr, &s.acc, None, &mut quat, None)
+        .unwrap();
+    for (k, row) in quat.iter().enumerate() {
+        d.update(&s.gyr[k], &s.acc[k], None).unwrap();
+        assert_eq!(row.map(f64::to_bits), d.quaternion().map(f64::to_bits));
+    }
+
+    // Lengths that disagree: refused before any sample.
+    let mut e = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
+    let short = &s.acc[..n - 1];
+    for r in [
+        e.update_batch(&s.gyr, short, None, &mut quat, None),
+        e.update_batch(&s.gyr, &s.acc, Some(&s.mag[..5]), &mut quat, None),
+        e.update_batch(&s.gyr, &s.acc, None, &mut quat[..n - 1], None),
+        e.update_batch(&s.gyr, &s.acc, None, &mut quat, Some(&mut spread[..3])),
+    ] {
+        assert!(matches!(r, Err(Error::InvalidDimension(_))), "{r:?}");
+    }
+    assert_eq!(e.samples(), 0);
+    // A first sample without gravity: refused at index 0.
+    let mut zero = s.acc.clone();
+    zero[0] = [0.0; 3];
+    match e.update_batch(&s.gyr, &zero, None, &mut quat, None) {
+        Err(Error::InvalidArgument(msg)) => assert!(msg.contains("sample 0"), "{msg}"),
+        other => panic!("{other:?}"),
+    }
+    assert!(!e.is_initialized());
+}
+
+#[test]
+fn parameters_are_validated() {
+    let good = AhrsParams::new(0.01);
+    assert!(Ahrs::new(&good).is_ok());
+    assert_eq!(Ahrs::new(&good).unwrap().params(), &good);
+    type Setter = fn(&mut AhrsParams, f64);
+    let positive: [(&str, Setter); 10] = [
+        ("sample_time", |p, v| p.sample_time = v),
+        ("gyro_noise", |p, v| p.gyro_noise = v),
+        ("acc_noise", |p, v| p.acc_noise = v),
+        ("acc_reject", |p, v| p.acc_reject = v),
+        ("gravity", |p, v| p.gravity = v),
+        ("mag_noise", |p, v| p.mag_noise = v),
+        ("mag_norm_tol", |p, v| p.mag_norm_tol = v),
+        ("bias_max", |p, v| p.bias_max = v),
+        ("rest_time", |p, v| p.rest_time = v),
+        ("init_std", |p, v| p.init_std = v),
+    ];
+    for (name, set) in positive {
+        for v in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let mut p = good;
+            set(&mut p, v);
+            let r = Ahrs::new(&p);
+            assert!(
+                matches!(r, Err(Error::InvalidArgument(ref m)) if m.contains(name)),
+                "{name} = {v}: {r:?}"
+            );
+            assert!(p.validate().is_err());
+        }
+    }
+    // bias_time: 0 disables the estimation, negative or NaN is refused.
+    let mut p = good;
+    p.bias_time = 0.0;
+    assert!(Ahrs::new(&p).is_ok());
+    for v in [-1.0, f64::NAN, f64::INFINITY] {
+        p.bias_time = v;
+        assert!(
+            matches!(Ahrs::new(&p), Err(Error::InvalidArgument(_))),
+            "{v}"
+        );
+    }
+}
+
+#[test]
+fn ahrs_is_send_and_sync() {
+    fn check<T: Send + Sync + Clone>() {}
+    check::<Ahrs>();
+    check::<AhrsParams>();
+}
