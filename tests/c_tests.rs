@@ -244,3 +244,23 @@ fn cpp_filter_eigen_references() {
     );
     run(&exe);
 }
+
+#[test]
+fn cpp_vector_eigen_references() {
+    let inc = eigen_include();
+    let inc = inc.to_str().expect("UTF-8 path");
+    let exe = build(
+        "vector_eigen.cpp",
+        "vector_eigen",
+        "c++11",
+        &["-isystem", inc],
+        Link::Static,
+    );
+    run(&exe);
+}
+
+#[test]
+fn c_vector_and_ahrs_api() {
+    let exe = build("ahrs_api.c", "ahrs_api", "c99", &[], Link::Static);
+    run(&exe);
+}

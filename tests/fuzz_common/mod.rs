@@ -407,6 +407,11 @@ impl Buf {
             .all(|(i, &w)| w == sentinel(i))
     }
 
+    /// Body words `from..to` still hold their sentinel pattern (not written).
+    pub fn untouched_range(&self, from: usize, to: usize) -> bool {
+        (self.guard + from..self.guard + to).all(|i| self.words[i] == sentinel(i))
+    }
+
     /// No body word holds its sentinel any more (everything was written).
     pub fn fully_written(&self) -> bool {
         (self.guard..self.guard + self.len).all(|i| self.words[i] != sentinel(i))

@@ -1,0 +1,623 @@
+/* The C API of the vector observations, rotation noise, angular spread and the AHRS
+ * (bingham_vector_observation, bingham_noise_from_angle_std, bingham_angular_spread,
+ * bingham_filter_update_vector / _log_likelihood_vector / _angular_spread, bingham_ahrs_*):
+ *
+ * - the success path of every function;
+ * - every pointer argument set to NULL -> BINGHAM_ERR_NULL_ARGUMENT with a message naming the
+ *   function and the argument ("`body` is NULL"); optional ones (mag, spread) accepted;
+ * - NaN/Inf in every vector entry, non-unit vectors just outside the 1e-6 tolerance (just
+ *   inside: accepted), kappa negative/NaN/Inf, sigma 0/negative/NaN/Inf/tiny, d = 3 (with the
+ *   arrays aimed at an inaccessible page), a d = 2 filter for update_vector -> the documented
+ *   status;
+ * - after every failure: outputs byte-for-byte unchanged (sentinel fill), filter / AHRS state
+ *   identical (quaternion, M, z, bias, spread);
+ * - the AHRS: NaN samples refused, a first sample without gravity refused, params with
+ *   sample_time 0/NaN refused, a batch stopping at a NaN in sample 5 of 10 (message "sample 5",
+ *   rows 0..4 written and equal to single updates, rows 5..9 untouched), mag = NULL accepted,
+ *   bingham_ahrs_free(NULL), clones evolving identically.
+ *
+ * bingham_ahrs_params is filled with bingham_ahrs_params_default() only (its fields may change);
+ * only sample_time is set by hand.
+ */
+#define _DEFAULT_SOURCE 1
+#include <stdint.h>
+#include <stdlib.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include "check.h"
+
+static const double PI = 3.14159265358979323846;
+static void *no_access_page; /* PROT_NONE: any access crashes */
+
+static const char *last_message(void) {
+    static char buf[1024];
+    size_t len = 0;
+    bingham_last_error_message(buf, sizeof buf, &len);
+    return buf;
+}
+
+/* The last message starts with "<fn>: " and contains `needle` (if not NULL). */
+static void check_msg(const char *fn, const char *needle) {
+    const char *msg = last_message();
+    size_t nl = strlen(fn);
+    int ok = strncmp(msg, fn, nl) == 0 && msg[nl] == ':' && (!needle || strstr(msg, needle));
+    if (!ok) fprintf(stderr, "    message \"%s\" should name %s and contain \"%s\"\n", msg, fn, needle ? needle : "");
+    CHECK(ok);
+}
+
+static void check_null_msg(const char *fn, const char *arg) {
+    char needle[64];
+    snprintf(needle, sizeof needle, "`%s` is NULL", arg);
+    check_msg(fn, needle);
+}
+
+#define SENT 0xA5
+static void fill(void *p, size_t bytes) { memset(p, SENT, bytes); }
+static int untouched(const void *p, size_t bytes) {
+    const unsigned char *c = (const unsigned char *)p;
+    for (size_t i = 0; i < bytes; ++i)
+        if (c[i] != SENT) return 0;
+    return 1;
+}
+
+static int all_finite(const double *v, size_t n) {
+    for (size_t i = 0; i < n; ++i)
+        if (!isfinite(v[i])) return 0;
+    return 1;
+}
+
+static void normalize3(double *v) {
+    double s = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    v[0] /= s, v[1] /= s, v[2] /= s;
+}
+
+/* ---- bingham_vector_observation ---------------------------------------------------------- */
+
+static void test_vector_observation(void) {
+    const char *fn = "bingham_vector_observation";
+    double b[3] = {0.3, -0.5, 0.8}, r[3] = {0.1, 0.2, -0.9}, m[16], z[4];
+    normalize3(b);
+    normalize3(r);
+    CHECK_OK(bingham_vector_observation(b, r, 4.0, m, z));
+    CHECK(all_finite(m, 16) && z[0] == -8.0 && z[1] == -8.0 && z[2] == 0.0 && z[3] == 0.0);
+    CHECK_OK(bingham_vector_observation(b, r, 0.0, m, z));
+    CHECK(z[0] == 0.0 && z[1] == 0.0 && z[2] == 0.0 && z[3] == 0.0);
+    /* NULLs */
+    const double *ins[2] = {b, r};
+    const char *in_names[2] = {"body", "reference"};
+    for (int k = 0; k < 4; ++k) {
+        const double *bb = k == 0 ? NULL : ins[0], *rr = k == 1 ? NULL : ins[1];
+        double *mm = k == 2 ? NULL : m, *zz = k == 3 ? NULL : z;
+        fill(m, sizeof m);
+        fill(z, sizeof z);
+        CHECK_STATUS(bingham_vector_observation(bb, rr, 1.0, mm, zz), BINGHAM_ERR_NULL_ARGUMENT);
+        CHECK(untouched(m, sizeof m) && untouched(z, sizeof z));
+        check_null_msg(fn, k < 2 ? in_names[k] : (k == 2 ? "m" : "z"));
+    }
+    /* NaN / Inf in each entry of each vector */
+    const double bad[3] = {NAN, INFINITY, -INFINITY};
+    for (int which = 0; which < 2; ++which)
+        for (int i = 0; i < 3; ++i)
+            for (int v = 0; v < 3; ++v) {
+                double bb[3], rr[3];
+                memcpy(bb, b, sizeof bb);
+                memcpy(rr, r, sizeof rr);
+                (which ? rr : bb)[i] = bad[v];
+                fill(m, sizeof m);
+                fill(z, sizeof z);
+                CHECK_STATUS(bingham_vector_observation(bb, rr, 1.0, m, z), BINGHAM_ERR_INVALID_ARGUMENT);
+                CHECK(untouched(m, sizeof m) && untouched(z, sizeof z));
+                check_msg(fn, in_names[which]);
+            }
+    /* non-unit: just outside / inside the tolerance, zero vector, huge */
+    for (int which = 0; which < 2; ++which) {
+        const double scales[4] = {1 + 1e-4, 1 - 1e-4, 0.0, 1e300};
+        for (int s = 0; s < 4; ++s) {
+            double bb[3], rr[3];
+            memcpy(bb, b, sizeof bb);
+            memcpy(rr, r, sizeof rr);
+            for (int i = 0; i < 3; ++i) (which ? rr : bb)[i] *= scales[s];
+            fill(m, sizeof m);
+            fill(z, sizeof z);
+            CHECK_STATUS(bingham_vector_observation(bb, rr, 1.0, m, z), BINGHAM_ERR_INVALID_ARGUMENT);
+            CHECK(untouched(m, sizeof m) && untouched(z, sizeof z));
+            check_msg(fn, "unit");
+        }
+        double bb[3], rr[3];
+        memcpy(bb, b, sizeof bb);
+        memcpy(rr, r, sizeof rr);
+        for (int i = 0; i < 3; ++i) (which ? rr : bb)[i] *= 1 + 1e-8;
+        CHECK_OK(bingham_vector_observation(bb, rr, 1.0, m, z));
+    }
+    /* kappa: negative, NaN, +-Inf */
+    const double bad_kappa[5] = {-1.0, -1e-300, NAN, INFINITY, -INFINITY};
+    for (int k = 0; k < 5; ++k) {
+        fill(m, sizeof m);
+        fill(z, sizeof z);
+        CHECK_STATUS(bingham_vector_observation(b, r, bad_kappa[k], m, z), BINGHAM_ERR_INVALID_ARGUMENT);
+        CHECK(untouched(m, sizeof m) && untouched(z, sizeof z));
+        check_msg(fn, "kappa");
+    }
+}
+
+/* ---- bingham_noise_from_angle_std ---------------------------------------------------------- */
+
+static void test_noise_from_angle_std(void) {
+    const char *fn = "bingham_noise_from_angle_std";
+    double m[16], z[4];
+    for (size_t d = 2; d <= 4; d += 2) {
+        CHECK_OK(bingham_noise_from_angle_std(d, 0.1, m, z));
+        CHECK(all_finite(m, d * d) && z[d - 1] == 0.0 && z[0] < 0.0 && m[d - 1] == 1.0);
+        fill(m, sizeof m);
+        fill(z, sizeof z);
+        CHECK_STATUS(bingham_noise_from_angle_std(d, 0.1, NULL, z), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "m");
+        CHECK_STATUS(bingham_noise_from_angle_std(d, 0.1, m, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "z");
+        CHECK(untouched(m, sizeof m) && untouched(z, sizeof z));
+        const double bad[7] = {0.0, -0.0, -0.1, NAN, INFINITY, -INFINITY, 1e-9};
+        for (int k = 0; k < 7; ++k) {
+            CHECK_STATUS(bingham_noise_from_angle_std(d, bad[k], m, z), BINGHAM_ERR_INVALID_ARGUMENT);
+            CHECK(untouched(m, sizeof m) && untouched(z, sizeof z));
+            /* (below ~6e-7 rad the message speaks of the singular second moment, not of sigma) */
+            check_msg(fn, bad[k] == 1e-9 ? NULL : "sigma");
+        }
+        /* large sigma: still a valid (nearly uniform) distribution */
+        CHECK_OK(bingham_noise_from_angle_std(d, 50.0, m, z));
+        CHECK(all_finite(m, d * d) && all_finite(z, d) && z[d - 1] == 0.0);
+    }
+    const size_t bad_d[5] = {0, 1, 3, 5, (size_t)-1};
+    for (int k = 0; k < 5; ++k) {
+        CHECK_STATUS(bingham_noise_from_angle_std(bad_d[k], 0.1, (double *)no_access_page, (double *)no_access_page),
+                     BINGHAM_ERR_INVALID_DIMENSION);
+        check_msg(fn, "d = ");
+        CHECK_STATUS(bingham_noise_from_angle_std(bad_d[k], NAN, NULL, NULL), BINGHAM_ERR_INVALID_DIMENSION);
+    }
+}
+
+/* ---- bingham_angular_spread ---------------------------------------------------------------- */
+
+static void test_angular_spread(void) {
+    const char *fn = "bingham_angular_spread";
+    const double m4[16] = {0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 0};
+    const double z4[4] = {-400, -100, -25, 0};
+    double sp[4];
+    CHECK_OK(bingham_angular_spread(4, m4, z4, sp));
+    CHECK(all_finite(sp, 4) && sp[0] < sp[1] && sp[1] < sp[2] && sp[2] < sp[3]);
+    CHECK_CLOSE(sp[0] * sp[0] + sp[1] * sp[1] + sp[2] * sp[2], sp[3] * sp[3], 1e-12);
+    const double m2[4] = {0, 1, 1, 0}, z2[2] = {-50, 0};
+    CHECK_OK(bingham_angular_spread(2, m2, z2, sp));
+    CHECK(all_finite(sp, 2) && sp[0] > 0);
+    /* uniform: total 2 sqrt(3/4) (d = 4) */
+    const double zu[4] = {0, 0, 0, 0};
+    CHECK_OK(bingham_angular_spread(4, m4, zu, sp));
+    CHECK_CLOSE(sp[3], sqrt(3.0), 1e-12);
+    /* NULLs */
+    fill(sp, sizeof sp);
+    CHECK_STATUS(bingham_angular_spread(4, NULL, z4, sp), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "m");
+    CHECK_STATUS(bingham_angular_spread(4, m4, NULL, sp), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "z");
+    CHECK_STATUS(bingham_angular_spread(4, m4, z4, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "spread");
+    CHECK(untouched(sp, sizeof sp));
+    /* NaN / Inf anywhere in m or z */
+    for (int i = 0; i < 20; ++i) {
+        double mm[16], zz[4];
+        memcpy(mm, m4, sizeof mm);
+        memcpy(zz, z4, sizeof zz);
+        if (i < 16) mm[i] = i % 2 ? NAN : INFINITY;
+        else zz[i - 16] = i % 2 ? NAN : -INFINITY;
+        CHECK_STATUS(bingham_angular_spread(4, mm, zz, sp), BINGHAM_ERR_INVALID_ARGUMENT);
+        CHECK(untouched(sp, sizeof sp));
+        check_msg(fn, i < 16 ? "m[" : "z[");
+    }
+    /* not orthogonal */
+    double mm[16];
+    memcpy(mm, m4, sizeof mm);
+    mm[3] += 1e-4;
+    CHECK_STATUS(bingham_angular_spread(4, mm, z4, sp), BINGHAM_ERR_INVALID_ARGUMENT);
+    CHECK(untouched(sp, sizeof sp));
+    check_msg(fn, "orthogonal");
+    /* d = 3 and other bad d: refused before any access */
+    const size_t bad_d[5] = {0, 1, 3, 5, 65};
+    for (int k = 0; k < 5; ++k) {
+        CHECK_STATUS(bingham_angular_spread(bad_d[k], (const double *)no_access_page, (const double *)no_access_page,
+                                            (double *)no_access_page),
+                     BINGHAM_ERR_INVALID_DIMENSION);
+        check_msg(fn, "d = ");
+    }
+}
+
+/* ---- the filter with vectors ---------------------------------------------------------------- */
+
+typedef struct {
+    double m[16], z[4];
+} fstate;
+
+static fstate fsnap(const bingham_filter *f) {
+    fstate s;
+    memset(&s, 0, sizeof s);
+    CHECK_OK(bingham_filter_get_state(f, s.m, s.z));
+    return s;
+}
+
+static void test_filter_vector(void) {
+    const double m0[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    const double z0[4] = {-20, -10, -5, 0};
+    double b[3] = {0.2, 0.1, 0.97}, r[3] = {0, 0, 1};
+    normalize3(b);
+    bingham_filter *f = NULL, *f2 = NULL;
+    CHECK_OK(bingham_filter_new(4, m0, z0, &f));
+    const double m2[4] = {1, 0, 0, 1}, z2[2] = {-3, 0};
+    CHECK_OK(bingham_filter_new(2, m2, z2, &f2));
+    if (!f || !f2) return;
+
+    /* success paths */
+    double ll = 0, sp[4];
+    CHECK_OK(bingham_filter_log_likelihood_vector(f, b, r, 10.0, &ll));
+    CHECK(isfinite(ll));
+    CHECK_OK(bingham_filter_angular_spread(f, sp));
+    CHECK(all_finite(sp, 4) && sp[3] > 0);
+    double before_total = sp[3];
+    CHECK_OK(bingham_filter_update_vector(f, b, r, 100.0));
+    CHECK_OK(bingham_filter_angular_spread(f, sp));
+    CHECK(sp[3] < before_total); /* an observation sharpens the state */
+    double sp2[3];
+    fill(sp2, sizeof sp2);
+    CHECK_OK(bingham_filter_angular_spread(f2, sp2));
+    CHECK(all_finite(sp2, 2) && untouched(&sp2[2], sizeof(double))); /* d = 2: exactly 2 written */
+
+    fstate s0 = fsnap(f);
+    /* update_vector: NULLs */
+    const char *fu = "bingham_filter_update_vector", *fl = "bingham_filter_log_likelihood_vector";
+    CHECK_STATUS(bingham_filter_update_vector(NULL, b, r, 1.0), BINGHAM_ERR_NULL_ARGUMENT);
+    check_msg(fu, "is NULL");
+    CHECK_STATUS(bingham_filter_update_vector(f, NULL, r, 1.0), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fu, "body");
+    CHECK_STATUS(bingham_filter_update_vector(f, b, NULL, 1.0), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fu, "reference");
+    /* log_likelihood_vector: NULLs, out untouched */
+    double out = 0;
+    fill(&out, sizeof out);
+    CHECK_STATUS(bingham_filter_log_likelihood_vector(NULL, b, r, 1.0, &out), BINGHAM_ERR_NULL_ARGUMENT);
+    check_msg(fl, "is NULL");
+    CHECK_STATUS(bingham_filter_log_likelihood_vector(f, NULL, r, 1.0, &out), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fl, "body");
+    CHECK_STATUS(bingham_filter_log_likelihood_vector(f, b, NULL, 1.0, &out), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fl, "reference");
+    CHECK_STATUS(bingham_filter_log_likelihood_vector(f, b, r, 1.0, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fl, "out");
+    CHECK(untouched(&out, sizeof out));
+    /* angular_spread: NULLs */
+    fill(sp, sizeof sp);
+    CHECK_STATUS(bingham_filter_angular_spread(NULL, sp), BINGHAM_ERR_NULL_ARGUMENT);
+    check_msg("bingham_filter_angular_spread", "is NULL");
+    CHECK_STATUS(bingham_filter_angular_spread(f, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_filter_angular_spread", "spread");
+    CHECK(untouched(sp, sizeof sp));
+
+    /* NaN / Inf, non-unit, bad kappa: both functions, state and out untouched */
+    const double bad[3] = {NAN, INFINITY, -INFINITY};
+    for (int which = 0; which < 2; ++which)
+        for (int i = 0; i < 3; ++i)
+            for (int v = 0; v < 4; ++v) {
+                double bb[3], rr[3];
+                memcpy(bb, b, sizeof bb);
+                memcpy(rr, r, sizeof rr);
+                double *t = which ? rr : bb;
+                if (v < 3) t[i] = bad[v];
+                else for (int k = 0; k < 3; ++k) t[k] *= 1 + 1e-4; /* non-unit */
+                CHECK_STATUS(bingham_filter_update_vector(f, bb, rr, 5.0), BINGHAM_ERR_INVALID_ARGUMENT);
+                check_msg(fu, which ? "reference" : "body");
+                CHECK_STATUS(bingham_filter_log_likelihood_vector(f, bb, rr, 5.0, &out), BINGHAM_ERR_INVALID_ARGUMENT);
+                check_msg(fl, which ? "reference" : "body");
+                CHECK(untouched(&out, sizeof out));
+            }
+    const double bad_kappa[4] = {-1.0, NAN, INFINITY, -INFINITY};
+    for (int k = 0; k < 4; ++k) {
+        CHECK_STATUS(bingham_filter_update_vector(f, b, r, bad_kappa[k]), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg(fu, "kappa");
+        CHECK_STATUS(bingham_filter_log_likelihood_vector(f, b, r, bad_kappa[k], &out), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg(fl, "kappa");
+        CHECK(untouched(&out, sizeof out));
+    }
+    fstate s1 = fsnap(f);
+    CHECK(memcmp(&s0, &s1, sizeof s0) == 0);
+
+    /* a d = 2 filter: INVALID_DIMENSION, state unchanged */
+    double m2b[4], z2b[2], m2a[4], z2a[2];
+    CHECK_OK(bingham_filter_get_state(f2, m2b, z2b));
+    CHECK_STATUS(bingham_filter_update_vector(f2, b, r, 1.0), BINGHAM_ERR_INVALID_DIMENSION);
+    check_msg(fu, "d = 2");
+    CHECK_STATUS(bingham_filter_log_likelihood_vector(f2, b, r, 1.0, &out), BINGHAM_ERR_INVALID_DIMENSION);
+    check_msg(fl, "d = 2");
+    CHECK(untouched(&out, sizeof out));
+    CHECK_OK(bingham_filter_get_state(f2, m2a, z2a));
+    CHECK(memcmp(m2a, m2b, sizeof m2a) == 0 && memcmp(z2a, z2b, sizeof z2a) == 0);
+
+    /* kappa = 0: no information, the state stays */
+    CHECK_OK(bingham_filter_update_vector(f, b, r, 0.0));
+    fstate s2 = fsnap(f);
+    for (int i = 0; i < 4; ++i) CHECK_CLOSE(s2.z[i], s0.z[i], 1e-12);
+    /* huge kappa: a sharp state or NUMERICAL, never a broken state */
+    int st = (int)bingham_filter_update_vector(f, b, r, 1e300);
+    CHECK(st == BINGHAM_OK || st == BINGHAM_ERR_NUMERICAL);
+    fstate s3 = fsnap(f);
+    CHECK(all_finite(s3.m, 16) && all_finite(s3.z, 4) && s3.z[3] == 0.0);
+    if (st != BINGHAM_OK) CHECK(memcmp(&s2, &s3, sizeof s2) == 0);
+    bingham_filter_free(f);
+    bingham_filter_free(f2);
+}
+
+/* ---- the AHRS ------------------------------------------------------------------------------- */
+
+typedef struct {
+    double q[4], m[16], z[4], bias[3], spread[4];
+} astate;
+
+static astate asnap(const bingham_ahrs *a) {
+    astate s;
+    memset(&s, 0, sizeof s);
+    CHECK_OK(bingham_ahrs_quaternion(a, s.q));
+    CHECK_OK(bingham_ahrs_state(a, s.m, s.z));
+    CHECK_OK(bingham_ahrs_gyro_bias(a, s.bias));
+    CHECK_OK(bingham_ahrs_angular_spread(a, s.spread));
+    return s;
+}
+
+static int same_state(astate a, astate b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+/* Sample k of a slow rotation about z with gravity and a northern field (sensor frame). */
+static void sample(int k, double *g, double *acc, double *mag) {
+    double t = 0.01 * k, yaw = 0.3 * t, c = cos(yaw), s = sin(yaw);
+    g[0] = 0.001, g[1] = -0.002, g[2] = 0.3;
+    acc[0] = 0.0, acc[1] = 0.0, acc[2] = 9.81;
+    /* world field (0, 20, -40) seen by a sensor rotated by yaw about z: R^T (0, 20, -40) */
+    mag[0] = s * 20.0, mag[1] = c * 20.0, mag[2] = -40.0;
+}
+
+static bingham_ahrs *new_ahrs(double dt) {
+    bingham_ahrs_params p;
+    bingham_ahrs *a = NULL;
+    CHECK_OK(bingham_ahrs_params_default(dt, &p));
+    CHECK_OK(bingham_ahrs_new(&p, &a));
+    return a;
+}
+
+static void test_ahrs_params_and_new(void) {
+    bingham_ahrs_params p, q;
+    const double bad_dt[5] = {0.0, -0.01, NAN, INFINITY, -INFINITY};
+    for (int k = 0; k < 5; ++k) {
+        fill(&p, sizeof p);
+        CHECK_STATUS(bingham_ahrs_params_default(bad_dt[k], &p), BINGHAM_ERR_INVALID_ARGUMENT);
+        CHECK(untouched(&p, sizeof p));
+        check_msg("bingham_ahrs_params_default", "sample_time");
+    }
+    CHECK_STATUS(bingham_ahrs_params_default(0.01, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_params_default", "p");
+    CHECK_OK(bingham_ahrs_params_default(0.01, &p));
+    CHECK(p.sample_time == 0.01);
+    CHECK_OK(bingham_ahrs_params_default(0.01, &q));
+    CHECK(memcmp(&p, &q, sizeof p) == 0); /* deterministic */
+
+    bingham_ahrs *a = (bingham_ahrs *)no_access_page;
+    CHECK_STATUS(bingham_ahrs_new(NULL, &a), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_new", "p");
+    CHECK(a == (bingham_ahrs *)no_access_page);
+    CHECK_STATUS(bingham_ahrs_new(&p, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_new", "out");
+    const double bad_st[4] = {0.0, NAN, -1.0, INFINITY};
+    for (int k = 0; k < 4; ++k) {
+        q = p;
+        q.sample_time = bad_st[k];
+        CHECK_STATUS(bingham_ahrs_new(&q, &a), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg("bingham_ahrs_new", "sample_time");
+        CHECK(a == (bingham_ahrs *)no_access_page);
+    }
+    a = NULL;
+    CHECK_OK(bingham_ahrs_new(&p, &a));
+    CHECK(a != NULL);
+    /* before the first sample: identity, uniform state, zero bias */
+    astate s = asnap(a);
+    CHECK(s.q[0] == 1.0 && s.q[1] == 0.0 && s.q[2] == 0.0 && s.q[3] == 0.0);
+    for (int i = 0; i < 4; ++i) CHECK(s.z[i] == 0.0);
+    CHECK(s.bias[0] == 0.0 && s.bias[1] == 0.0 && s.bias[2] == 0.0);
+    bingham_ahrs_free(a);
+    bingham_ahrs_free(NULL); /* no-op */
+}
+
+static void test_ahrs_update(void) {
+    bingham_ahrs *a = new_ahrs(0.01);
+    if (!a) return;
+    const char *fn = "bingham_ahrs_update";
+    double g[3], acc[3], mag[3];
+    sample(0, g, acc, mag);
+    /* a first sample without gravity is refused, and the AHRS stays uninitialized */
+    astate s0 = asnap(a);
+    double zero[3] = {0, 0, 0};
+    CHECK_STATUS(bingham_ahrs_update(a, g, zero, mag), BINGHAM_ERR_INVALID_ARGUMENT);
+    check_msg(fn, NULL);
+    CHECK(same_state(s0, asnap(a)));
+    for (int k = 0; k < 50; ++k) {
+        sample(k, g, acc, mag);
+        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+    }
+    astate s = asnap(a);
+    CHECK(all_finite(s.q, 4) && fabs(s.q[0] * s.q[0] + s.q[1] * s.q[1] + s.q[2] * s.q[2] + s.q[3] * s.q[3] - 1) < 1e-12);
+    CHECK(s.q[0] >= 0.0 && s.z[3] == 0.0 && all_finite(s.spread, 4));
+    /* NULLs */
+    CHECK_STATUS(bingham_ahrs_update(NULL, g, acc, mag), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "a");
+    CHECK_STATUS(bingham_ahrs_update(a, NULL, acc, mag), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "gyr");
+    CHECK_STATUS(bingham_ahrs_update(a, g, NULL, mag), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "acc");
+    CHECK(same_state(s, asnap(a)));
+    /* NaN / Inf in every entry of every sample vector: refused, AHRS unchanged */
+    const double bad[3] = {NAN, INFINITY, -INFINITY};
+    const char *names[3] = {"gyr", "acc", "mag"};
+    for (int which = 0; which < 3; ++which)
+        for (int i = 0; i < 3; ++i)
+            for (int v = 0; v < 3; ++v) {
+                double gg[3], aa[3], mm[3];
+                sample(50, gg, aa, mm);
+                (which == 0 ? gg : which == 1 ? aa : mm)[i] = bad[v];
+                CHECK_STATUS(bingham_ahrs_update(a, gg, aa, mm), BINGHAM_ERR_INVALID_ARGUMENT);
+                check_msg(fn, names[which]);
+                CHECK(same_state(s, asnap(a)));
+            }
+    /* mag = NULL accepted; a zero field, free fall and a huge sample are not errors */
+    sample(50, g, acc, mag);
+    CHECK_OK(bingham_ahrs_update(a, g, acc, NULL));
+    CHECK_OK(bingham_ahrs_update(a, g, acc, zero));
+    CHECK_OK(bingham_ahrs_update(a, g, zero, mag));
+    double huge[3] = {1e300, -1e300, 1e300};
+    int st = (int)bingham_ahrs_update(a, g, acc, huge);
+    CHECK(st == BINGHAM_OK || st == BINGHAM_ERR_INVALID_ARGUMENT);
+    s = asnap(a);
+    CHECK(all_finite(s.q, 4) && all_finite(s.m, 16) && all_finite(s.z, 4) && all_finite(s.bias, 3));
+    /* getters: NULLs, outputs untouched */
+    double buf[16];
+    fill(buf, sizeof buf);
+    CHECK_STATUS(bingham_ahrs_quaternion(NULL, buf), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_quaternion", "a");
+    CHECK_STATUS(bingham_ahrs_quaternion(a, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_quaternion", "q");
+    CHECK_STATUS(bingham_ahrs_state(NULL, buf, buf), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_state", "a");
+    CHECK_STATUS(bingham_ahrs_state(a, NULL, buf), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_state", "m");
+    CHECK_STATUS(bingham_ahrs_state(a, buf, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_state", "z");
+    CHECK_STATUS(bingham_ahrs_angular_spread(NULL, buf), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_angular_spread", "a");
+    CHECK_STATUS(bingham_ahrs_angular_spread(a, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_angular_spread", "spread");
+    CHECK_STATUS(bingham_ahrs_gyro_bias(NULL, buf), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_gyro_bias", "a");
+    CHECK_STATUS(bingham_ahrs_gyro_bias(a, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_gyro_bias", "bias");
+    CHECK(untouched(buf, sizeof buf));
+    /* clone: NULLs; then identical evolution */
+    bingham_ahrs *c = (bingham_ahrs *)no_access_page;
+    CHECK_STATUS(bingham_ahrs_clone(NULL, &c), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_clone", "a");
+    CHECK_STATUS(bingham_ahrs_clone(a, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_clone", "out");
+    CHECK(c == (bingham_ahrs *)no_access_page);
+    c = NULL;
+    CHECK_OK(bingham_ahrs_clone(a, &c));
+    if (c) {
+        CHECK(same_state(asnap(a), asnap(c)));
+        for (int k = 60; k < 300; ++k) {
+            sample(k, g, acc, mag);
+            g[0] += 0.5 * sin(0.05 * k); /* some motion */
+            CHECK_OK(bingham_ahrs_update(a, g, acc, k % 3 ? mag : NULL));
+            CHECK_OK(bingham_ahrs_update(c, g, acc, k % 3 ? mag : NULL));
+        }
+        CHECK(same_state(asnap(a), asnap(c)));
+        /* independent: updating the clone does not touch the original */
+        astate sa = asnap(a);
+        CHECK_OK(bingham_ahrs_update(c, g, acc, mag));
+        CHECK(same_state(sa, asnap(a)));
+        bingham_ahrs_free(c);
+    }
+    bingham_ahrs_free(a);
+}
+
+static void test_ahrs_batch(void) {
+    enum { N = 10 };
+    double g[3 * N], acc[3 * N], mag[3 * N], quat[4 * N], spread[N];
+    for (int k = 0; k < N; ++k) sample(k, g + 3 * k, acc + 3 * k, mag + 3 * k);
+    const char *fns[2] = {"bingham_ahrs_update_batch", "bingham_ahrs_update_batch_spread"};
+    for (int variant = 0; variant < 2; ++variant)
+        for (int which = 0; which < 3; ++which) {
+            const char *fn = fns[variant];
+            bingham_ahrs *a = new_ahrs(0.01), *ref = new_ahrs(0.01);
+            if (!a || !ref) return;
+            double *arr = which == 0 ? g : which == 1 ? acc : mag;
+            double saved = arr[3 * 5 + 1];
+            arr[3 * 5 + 1] = NAN;
+            fill(quat, sizeof quat);
+            fill(spread, sizeof spread);
+            int st = variant ? (int)bingham_ahrs_update_batch_spread(a, N, g, acc, mag, quat, spread)
+                             : (int)bingham_ahrs_update_batch(a, N, g, acc, mag, quat);
+            CHECK_STATUS(st, BINGHAM_ERR_INVALID_ARGUMENT);
+            check_msg(fn, "sample 5");
+            arr[3 * 5 + 1] = saved;
+            /* rows 0..4 written, equal to single updates; the rest untouched */
+            for (int k = 0; k < 5; ++k) {
+                double q[4], sp[4];
+                CHECK_OK(bingham_ahrs_update(ref, g + 3 * k, acc + 3 * k, mag + 3 * k));
+                CHECK_OK(bingham_ahrs_quaternion(ref, q));
+                CHECK(memcmp(q, quat + 4 * k, sizeof q) == 0);
+                if (variant) {
+                    CHECK_OK(bingham_ahrs_angular_spread(ref, sp));
+                    CHECK(spread[k] == sp[3]);
+                }
+            }
+            CHECK(untouched(quat + 4 * 5, 4 * (N - 5) * sizeof(double)));
+            CHECK(untouched(variant ? spread + 5 : spread, (variant ? N - 5 : N) * sizeof(double)));
+            /* the AHRS holds the state after sample 4 */
+            CHECK(same_state(asnap(a), asnap(ref)));
+            bingham_ahrs_free(a);
+            bingham_ahrs_free(ref);
+        }
+    /* full batch = single updates; mag and spread NULL accepted */
+    for (int use_mag = 0; use_mag < 2; ++use_mag) {
+        bingham_ahrs *a = new_ahrs(0.01), *ref = new_ahrs(0.01);
+        if (!a || !ref) return;
+        CHECK_OK(bingham_ahrs_update_batch_spread(a, N, g, acc, use_mag ? mag : NULL, quat, NULL));
+        for (int k = 0; k < N; ++k) CHECK_OK(bingham_ahrs_update(ref, g + 3 * k, acc + 3 * k, use_mag ? mag + 3 * k : NULL));
+        CHECK(same_state(asnap(a), asnap(ref)));
+        for (int k = 0; k < N; ++k) {
+            double *q = quat + 4 * k;
+            CHECK(q[0] >= 0.0 && fabs(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] - 1) < 1e-12);
+        }
+        /* n = 0: nothing happens */
+        astate s = asnap(a);
+        fill(quat, sizeof quat);
+        CHECK_OK(bingham_ahrs_update_batch(a, 0, g, acc, mag, quat));
+        CHECK(untouched(quat, sizeof quat) && same_state(s, asnap(a)));
+        /* NULLs */
+        const char *fn = "bingham_ahrs_update_batch";
+        CHECK_STATUS(bingham_ahrs_update_batch(NULL, N, g, acc, mag, quat), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "a");
+        CHECK_STATUS(bingham_ahrs_update_batch(a, N, NULL, acc, mag, quat), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "gyr");
+        CHECK_STATUS(bingham_ahrs_update_batch(a, N, g, NULL, mag, quat), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "acc");
+        CHECK_STATUS(bingham_ahrs_update_batch(a, N, g, acc, mag, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "quat");
+        CHECK_STATUS(bingham_ahrs_update_batch_spread(a, N, g, acc, mag, NULL, spread), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg("bingham_ahrs_update_batch_spread", "quat");
+        /* n * 4 overflowing: refused before any access */
+        CHECK_STATUS(bingham_ahrs_update_batch(a, (size_t)-1 / 2, (const double *)no_access_page,
+                                               (const double *)no_access_page, NULL, (double *)no_access_page),
+                     BINGHAM_ERR_INVALID_DIMENSION);
+        check_msg(fn, NULL);
+        CHECK(untouched(quat, sizeof quat) && same_state(s, asnap(a)));
+        bingham_ahrs_free(a);
+        bingham_ahrs_free(ref);
+    }
+}
+
+int main(void) {
+    long page = sysconf(_SC_PAGESIZE);
+    no_access_page = mmap(NULL, (size_t)page, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (no_access_page == MAP_FAILED) {
+        perror("mmap");
+        return 2;
+    }
+    (void)PI;
+    test_vector_observation();
+    test_noise_from_angle_std();
+    test_angular_spread();
+    test_filter_vector();
+    test_ahrs_params_and_new();
+    test_ahrs_update();
+    test_ahrs_batch();
+    return check_summary("ahrs_api");
+}
