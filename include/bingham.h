@@ -1010,7 +1010,8 @@ enum bingham_status bingham_filter_log_likelihood_vector(const struct bingham_fi
  * `spread[d-1]` the total (d = 4: the RMS of `2 sin(θ/2)`, θ the rotation angle from the mode,
  * ≈ the RMS angle).
  *
- * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `spread`). On error nothing is written.
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `spread`), `BINGHAM_ERR_NUMERICAL` (the moments
+ * of an extremely concentrated state cannot be evaluated). On error nothing is written.
  *
  * # Safety
  * `f`: a live handle; `spread`: d writable doubles.
@@ -1021,8 +1022,8 @@ enum bingham_status bingham_filter_angular_spread(const struct bingham_filter *f
  * Fills `p` with the default parameters for the sampling period `sample_time` (seconds, > 0).
  * The defaults are the tuned set.
  *
- * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`), `BINGHAM_ERR_INVALID_ARGUMENT` (`sample_time` not
- * finite or ≤ 0). On error `*p` is not written.
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`), `BINGHAM_ERR_INVALID_ARGUMENT` (`sample_time`
+ * outside 1e-6..1e3 s or not finite). On error `*p` is not written.
  *
  * # Safety
  * `p`: a writable `bingham_ahrs_params`.
@@ -1031,7 +1032,8 @@ enum bingham_status bingham_ahrs_params_default(double sample_time, struct bingh
 
 /**
  * Creates an AHRS with the parameters `p` (validated: every field finite, periods, noises and
- * thresholds > 0, `bias_time` ≥ 0).
+ * thresholds > 0, `bias_time` ≥ 0, `sample_time` within 1e-6..1e3 s, the process noise per
+ * step `gyro_noise·sqrt(sample_time)` at least 1e-6 rad).
  *
  * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`, `out`), `BINGHAM_ERR_INVALID_ARGUMENT` (a bad
  * field; the message names it). On error `*out` is not written.

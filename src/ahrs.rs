@@ -48,11 +48,19 @@ use crate::quaternion::q4;
 /// The world's "up" (ENU).
 const UP: [f64; 3] = [0.0, 0.0, 1.0];
 
+/// The smallest sampling period (s) the AHRS accepts.
+pub const MIN_SAMPLE_TIME: f64 = 1e-6;
+/// The largest sampling period (s) the AHRS accepts.
+pub const MAX_SAMPLE_TIME: f64 = 1e3;
+/// The smallest process noise per step (rad) the AHRS accepts (`gyro_noise·√sample_time`): below
+/// it the noise's concentration leaves the moment matching's range.
+pub const MIN_STEP_NOISE: f64 = 1e-6;
+
 /// Parameters of the AHRS. [`AhrsParams::new`] gives the defaults, tuned once on the nine BROAD
 /// trials (one set for all recordings).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AhrsParams {
-    /// Sampling period in seconds (> 0).
+    /// Sampling period in seconds (1e-6 to 1e3).
     pub sample_time: f64,
     /// Orientation process noise in rad/√s: the prediction adds isotropic rotation noise with
     /// standard deviation `gyro_noise·√sample_time` per step (gyroscope noise, bias drift and
@@ -124,7 +132,9 @@ impl AhrsParams {
         }
     }
 
-    /// Checks every field (finite; periods, noises and thresholds positive; `bias_time ≥ 0`).
+    /// Checks every field (finite; periods, noises and thresholds positive; `bias_time ≥ 0`;
+    /// `sample_time` within [`MIN_SAMPLE_TIME`, `MAX_SAMPLE_TIME`]; the process noise per step
+    /// at least [`MIN_STEP_NOISE`]).
     pub fn validate(&self) -> Result<()> {
         let positive = [
             ("sample_time", self.sample_time),
@@ -152,6 +162,20 @@ impl AhrsParams {
                     "AHRS parameter `{name}` must be finite and > 0, got {v}"
                 )));
             }
+        }
+        if !(MIN_SAMPLE_TIME..=MAX_SAMPLE_TIME).contains(&self.sample_time) {
+            return Err(Error::InvalidArgument(format!(
+                "AHRS parameter `sample_time` must lie in [{MIN_SAMPLE_TIME:e}, \
+                 {MAX_SAMPLE_TIME:e}] s, got {}",
+                self.sample_time
+            )));
+        }
+        let step = self.gyro_noise * self.sample_time.sqrt();
+        if step < MIN_STEP_NOISE {
+            return Err(Error::InvalidArgument(format!(
+                "AHRS parameters `gyro_noise`·√`sample_time` = {step:e} rad (the process noise per \
+                 step) must be at least {MIN_STEP_NOISE:e} rad"
+            )));
         }
         if !(self.bias_time.is_finite() && self.bias_time >= 0.0) {
             return Err(Error::InvalidArgument(format!(

@@ -46,13 +46,14 @@ pub fn check_direction(what: &str, v: &[f64]) -> Result<[f64; 3]> {
     fixed::unit::<3>(what, v)
 }
 
-/// Checks a von Mises–Fisher concentration: finite and `≥ 0`.
+/// Checks a von Mises–Fisher concentration: finite, `≥ 0`, and `2κ` finite.
 pub fn check_kappa(kappa: f64) -> Result<f64> {
-    if kappa.is_finite() && kappa >= 0.0 {
+    // 2κ is the likelihood's concentration: it must be a finite double as well.
+    if kappa.is_finite() && kappa >= 0.0 && (2.0 * kappa).is_finite() {
         Ok(kappa)
     } else {
         Err(Error::InvalidArgument(format!(
-            "`kappa` must be finite and >= 0, got {kappa}"
+            "`kappa` must be finite, >= 0 and at most half the largest double, got {kappa}"
         )))
     }
 }
@@ -135,7 +136,10 @@ pub fn noise_from_angle_std(d: usize, sigma: f64) -> Result<Bingham> {
     let (small, count) = match d {
         4 => {
             // 1 − a = (1 − E cos)/2, 1 − E cos = −expm1(−σ²/2) + σ² e^{−σ²/2}.
-            let one_minus_a = 0.5 * (-(-0.5 * s2).exp_m1() + s2 * (-0.5 * s2).exp());
+            // σ² e^{−σ²/2} → 0 as σ → ∞ (written so that σ² = ∞ gives 0, not ∞·0).
+            let e = (-0.5 * s2).exp();
+            let tail = if e == 0.0 { 0.0 } else { s2 * e };
+            let one_minus_a = 0.5 * (-(-0.5 * s2).exp_m1() + tail);
             (one_minus_a / 3.0, 3)
         }
         2 => (-0.5 * (-2.0 * s2).exp_m1(), 1),
@@ -145,6 +149,13 @@ pub fn noise_from_angle_std(d: usize, sigma: f64) -> Result<Bingham> {
             )))
         }
     };
+    if small < crate::mle::OMEGA_MIN {
+        return Err(Error::InvalidArgument(format!(
+            "`sigma` = {sigma:e} rad is below the smallest supported angular standard deviation \
+             (about 6e-7 rad for d = 4, 3e-7 rad for d = 2): the concentration would exceed the \
+             MLE's range"
+        )));
+    }
     let big = 1.0 - small * count as f64;
     let mut s = DMatrix::zeros(d, d);
     s[(0, 0)] = big;

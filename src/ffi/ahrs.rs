@@ -138,8 +138,8 @@ pub struct bingham_ahrs {
 /// Fills `p` with the default parameters for the sampling period `sample_time` (seconds, > 0).
 /// The defaults are the tuned set.
 ///
-/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`), `BINGHAM_ERR_INVALID_ARGUMENT` (`sample_time` not
-/// finite or ≤ 0). On error `*p` is not written.
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`), `BINGHAM_ERR_INVALID_ARGUMENT` (`sample_time`
+/// outside 1e-6..1e3 s or not finite). On error `*p` is not written.
 ///
 /// # Safety
 /// `p`: a writable `bingham_ahrs_params`.
@@ -159,7 +159,8 @@ pub unsafe extern "C" fn bingham_ahrs_params_default(
 }
 
 /// Creates an AHRS with the parameters `p` (validated: every field finite, periods, noises and
-/// thresholds > 0, `bias_time` ≥ 0).
+/// thresholds > 0, `bias_time` ≥ 0, `sample_time` within 1e-6..1e3 s, the process noise per
+/// step `gyro_noise·sqrt(sample_time)` at least 1e-6 rad).
 ///
 /// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`, `out`), `BINGHAM_ERR_INVALID_ARGUMENT` (a bad
 /// field; the message names it). On error `*out` is not written.

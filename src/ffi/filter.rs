@@ -478,7 +478,8 @@ pub unsafe extern "C" fn bingham_filter_log_likelihood_vector(
 /// `spread[d-1]` the total (d = 4: the RMS of `2 sin(θ/2)`, θ the rotation angle from the mode,
 /// ≈ the RMS angle).
 ///
-/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `spread`). On error nothing is written.
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `spread`), `BINGHAM_ERR_NUMERICAL` (the moments
+/// of an extremely concentrated state cannot be evaluated). On error nothing is written.
 ///
 /// # Safety
 /// `f`: a live handle; `spread`: d writable doubles.
