@@ -500,6 +500,34 @@ static void test_ahrs_update(void) {
     CHECK_STATUS(bingham_ahrs_gyro_bias(a, NULL), BINGHAM_ERR_NULL_ARGUMENT);
     check_null_msg("bingham_ahrs_gyro_bias", "bias");
     CHECK(untouched(buf, sizeof buf));
+    /* set_state: NULLs, NaN and a non-orthogonal M refused with the AHRS unchanged; a valid
+     * state is taken (its mode becomes the estimate) */
+    {
+        astate before = asnap(a);
+        double m[16] = {0}, z[4] = {-50.0, -50.0, -50.0, 0.0}, q[4];
+        for (int i = 0; i < 4; ++i) m[i * 4 + (3 - i)] = 1.0; /* anti-diagonal: mode (1,0,0,0) */
+        CHECK_STATUS(bingham_ahrs_set_state(NULL, m, z), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg("bingham_ahrs_set_state", "a");
+        CHECK_STATUS(bingham_ahrs_set_state(a, NULL, z), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg("bingham_ahrs_set_state", "m");
+        CHECK_STATUS(bingham_ahrs_set_state(a, m, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg("bingham_ahrs_set_state", "z");
+        z[1] = NAN;
+        CHECK_STATUS(bingham_ahrs_set_state(a, m, z), BINGHAM_ERR_INVALID_ARGUMENT);
+        z[1] = -50.0;
+        m[0] = 0.1;
+        CHECK_STATUS(bingham_ahrs_set_state(a, m, z), BINGHAM_ERR_INVALID_ARGUMENT);
+        m[0] = 0.0;
+        CHECK(same_state(before, asnap(a)));
+        bingham_ahrs *t = NULL;
+        CHECK_OK(bingham_ahrs_clone(a, &t));
+        if (t) {
+            CHECK_OK(bingham_ahrs_set_state(t, m, z));
+            CHECK_OK(bingham_ahrs_quaternion(t, q));
+            CHECK(fabs(q[0] - 1.0) < 1e-12 && fabs(q[1]) < 1e-12 && fabs(q[2]) < 1e-12 && fabs(q[3]) < 1e-12);
+            bingham_ahrs_free(t);
+        }
+    }
     /* clone: NULLs; then identical evolution */
     bingham_ahrs *c = (bingham_ahrs *)no_access_page;
     CHECK_STATUS(bingham_ahrs_clone(NULL, &c), BINGHAM_ERR_NULL_ARGUMENT);

@@ -36,7 +36,8 @@
 //!
 //! The first sample initializes the state: tilt from the accelerometer, heading from the
 //! magnetometer (without one the heading is uniform: honestly unknown), each with the
-//! concentration of [`AhrsParams::init_std`].
+//! concentration of [`AhrsParams::init_std`] — unless a start was given with
+//! [`Ahrs::set_state`].
 //!
 //! Every step is allocation-free; a refused sample leaves the AHRS exactly as it was.
 
@@ -362,7 +363,7 @@ impl Ahrs {
         &self.params
     }
 
-    /// Whether the first sample has been processed (before it there is no estimate).
+    /// Whether there is an estimate: the first sample has been processed or a state was set.
     pub fn is_initialized(&self) -> bool {
         self.filter.is_some()
     }
@@ -410,6 +411,24 @@ impl Ahrs {
         }
     }
 
+    /// Replaces the orientation estimate by `Bingham(M, z)` (`m` 4×4 row-major orthogonal,
+    /// `z` 4 concentrations in any order and shift; validated as [`BinghamFilter::new`]), e.g.
+    /// a known start or a re-initialization. The bias estimate, the low-pass filters and the
+    /// magnetic reference are kept. Set before the first sample, it replaces the
+    /// self-initialization: the first sample then only primes the low-pass filters.
+    ///
+    /// Errors: [`Error::InvalidDimension`] (lengths), [`Error::InvalidArgument`] (NaN/Inf, `M`
+    /// not orthogonal); the AHRS is then unchanged.
+    pub fn set_state(&mut self, m: &[f64], z: &[f64]) -> Result<()> {
+        match self.filter.as_mut() {
+            Some(f) => f.set_state(m, z),
+            None => {
+                self.filter = Some(BinghamFilter::new(4, m, z)?);
+                Ok(())
+            }
+        }
+    }
+
     /// The underlying filter (`None` before the first sample).
     pub fn filter(&self) -> Option<&BinghamFilter> {
         self.filter.as_ref()
@@ -447,7 +466,7 @@ impl Ahrs {
             check_sample("mag", m)?;
         }
         let mag = mag.filter(|m| norm3(m) > 0.0);
-        if self.filter.is_none() {
+        if self.samples == 0 {
             return self.initialize(gyr, acc, mag);
         }
         // Work on a copy of the filter: the state is assigned only when every step succeeded.
@@ -618,14 +637,21 @@ impl Ahrs {
         }
         let up_b = scale3(acc, 1.0 / an);
         let kappa = 1.0 / (p.init_std * p.init_std);
-        let mut f = BinghamFilter::new(
-            4,
-            &[
-                1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
-            ],
-            &[0.0; 4],
-        )?;
-        f.update_exponent(&observation_exponent(&up_b, &UP, kappa))?;
+        // A state given by `set_state` before the first sample is kept as the start.
+        let given = self.filter.is_some();
+        let mut f = match &self.filter {
+            Some(f) => f.clone(),
+            None => BinghamFilter::new(
+                4,
+                &[
+                    1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+                ],
+                &[0.0; 4],
+            )?,
+        };
+        if !given {
+            f.update_exponent(&observation_exponent(&up_b, &UP, kappa))?;
+        }
         let mut mag_ref = None;
         if let Some(m) = mag {
             let east_b = cross3(m, &up_b);
@@ -634,7 +660,9 @@ impl Ahrs {
                 let east_b = scale3(&east_b, 1.0 / en);
                 let north_b = cross3(&up_b, &east_b);
                 let q0 = q4::from_matrix(&[east_b, north_b, up_b]);
-                f.update_exponent(&heading_exponent(&q0, kappa))?;
+                if !given {
+                    f.update_exponent(&heading_exponent(&q0, kappa))?;
+                }
                 let norm = norm3(m);
                 let dip = (dot3(m, &up_b) / norm).clamp(-1.0, 1.0).asin();
                 mag_ref = Some(MagRef {

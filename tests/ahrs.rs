@@ -632,3 +632,40 @@ fn ahrs_is_send_and_sync() {
     check::<Ahrs>();
     check::<AhrsParams>();
 }
+
+#[test]
+fn a_start_180_degrees_wrong_is_corrected() {
+    // The truth turned upside down about the east axis, told with a confident 10° spread.
+    let s = simulate(&Config::standard(5));
+    let flip = [0.0, 1.0, 0.0, 0.0];
+    let wrong = qmul(&flip, &s.truth[0]);
+    let noise = bingham::observation::noise_from_angle_std(4, 10f64.to_radians()).unwrap();
+    let start = noise.rotate_left(&wrong).unwrap();
+    let mut ahrs = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
+    ahrs.set_state(&start.m_row_major(), start.z().as_slice())
+        .unwrap();
+    assert!(ahrs.is_initialized());
+    assert!(angle(&ahrs.quaternion(), &s.truth[0]).to_degrees() > 179.0);
+    // the first sample keeps the given start (it only primes the low-pass filters)
+    ahrs.update(&s.gyr[0], &s.acc[0], Some(&s.mag[0])).unwrap();
+    assert!(angle(&ahrs.quaternion(), &s.truth[0]).to_degrees() > 170.0);
+    let mut last_bad = 0;
+    for k in 1..s.truth.len() {
+        ahrs.update(&s.gyr[k], &s.acc[k], Some(&s.mag[k])).unwrap();
+        if angle(&ahrs.quaternion(), &s.truth[k]).to_degrees() >= 5.0 {
+            last_bad = k;
+        }
+    }
+    let t = last_bad as f64 * s.dt;
+    println!("180° wrong start: within 5° for good from t = {t:.2} s");
+    assert!(t < 20.0, "still off at t = {t} s");
+    // a bad state is refused and changes nothing
+    let before = snapshot(&ahrs);
+    let mut m = start.m_row_major();
+    m[0] += 0.1;
+    assert!(ahrs.set_state(&m, start.z().as_slice()).is_err());
+    assert!(ahrs
+        .set_state(&start.m_row_major(), &[f64::NAN, 0.0, 0.0, 0.0])
+        .is_err());
+    assert_eq!(before, snapshot(&ahrs));
+}

@@ -12,9 +12,11 @@
  *   magnetometer   field (0, 20, -40) uT in ENU, white noise 0.3 uT; from t = 30 s to 35 s a
  *                  disturbance scales the field by 1.3
  *
- * Two AHRS: A sees every sample from t = 0 (it initializes at rest); B starts at t = 20 s in
+ * Three AHRS: A sees every sample from t = 0 (it initializes at rest); B starts at t = 20 s in
  * the middle of the fast motion (its first sample gives tilt and heading while rotating, and
- * the linear acceleration bursts and the disturbance still come). Every 5 s: the angle between
+ * the linear acceleration bursts and the disturbance still come); C is told a start 180 deg
+ * wrong (the truth turned upside down about the east axis) with a confident 10 deg spread
+ * (bingham_ahrs_set_state before its first sample) and has to find its way back. Every 5 s: the angle between
  * truth and estimate of each (deg), the predicted angular spread (the RMS of 2 sin(theta/2),
  * deg), and A's gyroscope-bias error (deg/s); at the end the RMS error after settling.
  * (Without the linear-acceleration bursts the RMS error is about 0.3 deg: horizontal bursts
@@ -91,16 +93,27 @@ int main(void) {
     const double bias[3] = {0.3 / DEG, -0.2 / DEG, 0.25 / DEG};
     const int n = (int)(DURATION * RATE + 0.5), start_b = (int)(START_B * RATE + 0.5);
     bingham_ahrs_params p;
-    bingham_ahrs *a = NULL, *b = NULL;
+    bingham_ahrs *a = NULL, *b = NULL, *c = NULL;
     if (check(bingham_ahrs_params_default(dt, &p), "bingham_ahrs_params_default") ||
-        check(bingham_ahrs_new(&p, &a), "bingham_ahrs_new") || check(bingham_ahrs_new(&p, &b), "bingham_ahrs_new"))
+        check(bingham_ahrs_new(&p, &a), "bingham_ahrs_new") || check(bingham_ahrs_new(&p, &b), "bingham_ahrs_new") ||
+        check(bingham_ahrs_new(&p, &c), "bingham_ahrs_new"))
         return 1;
 
     double q[4] = {cos(0.4), 0.0, 0.0, sin(0.4)}; /* truth: heading 46 deg to start */
+
+    /* C's wrong start: flip = (0, 1, 0, 0) (+) truth, i.e. 180 deg about east, 10 deg spread */
+    double m0[16], z0[4], mc[16], zc[4], wrong[4];
+    const double flip[4] = {0.0, 1.0, 0.0, 0.0};
+    qmul(flip, q, wrong);
+    if (check(bingham_noise_from_angle_std(4, 10.0 / DEG, m0, z0), "bingham_noise_from_angle_std") ||
+        check(bingham_rotate_left(4, m0, z0, wrong, mc, zc), "bingham_rotate_left") ||
+        check(bingham_ahrs_set_state(c, mc, zc), "bingham_ahrs_set_state"))
+        return 1;
+    double recovered_c = 0.0; /* from then on C stays within 5 deg of the truth */
     double sum_a = 0, sum_b = 0;
     int cnt_a = 0, cnt_b = 0;
-    printf("  time   err A   spread A   err B   spread B   bias err A\n");
-    printf("   (s)   (deg)     (deg)    (deg)     (deg)      (deg/s)\n");
+    printf("  time   err A   spread A   err B   spread B   err C   bias err A\n");
+    printf("   (s)   (deg)     (deg)    (deg)     (deg)    (deg)     (deg/s)\n");
     for (int k = 1; k <= n; ++k) {
         double t = k * dt, w0[3], w1[3], w[3];
         /* propagate the truth with the midpoint rate over the step: q <- q (+) exp(w dt / 2) */
@@ -126,10 +139,15 @@ int main(void) {
 
         if (check(bingham_ahrs_update(a, gyr, acc, mag), "bingham_ahrs_update (A)")) return 1;
         if (k >= start_b && check(bingham_ahrs_update(b, gyr, acc, mag), "bingham_ahrs_update (B)")) return 1;
-        double qa[4], qb[4];
+        if (check(bingham_ahrs_update(c, gyr, acc, mag), "bingham_ahrs_update (C)")) return 1;
+        double qa[4], qb[4], qc[4];
         bingham_ahrs_quaternion(a, qa);
         bingham_ahrs_quaternion(b, qb);
+        bingham_ahrs_quaternion(c, qc);
         double ea = angle_between(q, qa), eb = k >= start_b ? angle_between(q, qb) : NAN;
+        double ec = angle_between(q, qc);
+        if (k == 1) printf("%6.3f %7.2f %9s  %7s %9s  %7.2f   (C's wrong start)\n", t, ea, "", "", "", ec);
+        if (ec >= 5.0) recovered_c = t + dt;
         if (t > 10.0) sum_a += ea * ea, ++cnt_a;
         if (t > START_B + 10.0) sum_b += eb * eb, ++cnt_b;
 
@@ -139,13 +157,15 @@ int main(void) {
             if (k >= start_b) bingham_ahrs_angular_spread(b, sb);
             bingham_ahrs_gyro_bias(a, be);
             double dbx = be[0] - bias[0], dby = be[1] - bias[1], dbz = be[2] - bias[2];
-            printf("%6.1f %7.2f %9.2f  %7.2f %9.2f   %10.3f\n", t, ea, sa[3] * DEG, eb, sb[3] * DEG,
-                   sqrt(dbx * dbx + dby * dby + dbz * dbz) * DEG);
+            printf("%6.1f %7.2f %9.2f  %7.2f %9.2f  %7.2f   %10.3f\n", t, ea, sa[3] * DEG, eb, sb[3] * DEG,
+                   ec, sqrt(dbx * dbx + dby * dby + dbz * dbz) * DEG);
         }
     }
     printf("RMS error after settling: A %.2f deg (t > 10 s), B %.2f deg (t > %.0f s)\n", sqrt(sum_a / cnt_a),
            sqrt(sum_b / cnt_b), START_B + 10.0);
+    printf("C (started 180 deg wrong) within 5 deg of the truth from t = %.2f s on\n", recovered_c);
     bingham_ahrs_free(a);
     bingham_ahrs_free(b);
+    bingham_ahrs_free(c);
     return 0;
 }

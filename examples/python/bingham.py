@@ -153,6 +153,7 @@ _SIGNATURES = {
     "bingham_ahrs_update_batch_spread": (_STATUS, [ctypes.c_void_p, _SIZE, _D, _D, _D, _D, _D]),
     "bingham_ahrs_quaternion": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_state": (_STATUS, [ctypes.c_void_p, _D, _D]),
+    "bingham_ahrs_set_state": (_STATUS, [ctypes.c_void_p, _D, _D]),
     "bingham_ahrs_angular_spread": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_gyro_bias": (_STATUS, [ctypes.c_void_p, _D]),
 }
@@ -741,6 +742,12 @@ class Ahrs:
         z = np.empty(4)
         _check(lib().bingham_ahrs_state(self._h(), _ptr(m), _ptr(z)))
         return m, z
+
+    def set_state(self, m, z):
+        """Replaces the orientation estimate by Bingham(m, z) (a known start or a reset)."""
+        m = _in(m, "m", (4, 4))
+        z = _in(z, "z", (4,))
+        _check(lib().bingham_ahrs_set_state(self._h(), _ptr(m), _ptr(z)))
 
     def angular_spread(self):
         """Angular spread (radians): 3 principal axes, then the total."""

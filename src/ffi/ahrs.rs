@@ -423,6 +423,38 @@ pub unsafe extern "C" fn bingham_ahrs_state(
     })
 }
 
+/// Replaces the orientation estimate by `Bingham(m, z)`: a known start or a re-initialization.
+/// The bias estimate, the low-pass filters and the magnetic reference are kept. Called before
+/// the first sample, it replaces the self-initialization (the first sample then only primes
+/// the low-pass filters).
+///
+/// - `m`: 4×4 row-major orthogonal (within `BINGHAM_ORTHOGONALITY_TOL`); `z`: 4 concentrations,
+///   any order and shift (e.g. from `bingham_noise_from_angle_std()` rotated to the start with
+///   `bingham_rotate_left()`).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `m`, `z`), `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf,
+/// `m` not orthogonal). On error the AHRS is unchanged.
+///
+/// # Safety
+/// `a`: a live handle; `m`: 16 and `z`: 4 readable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_set_state(
+    a: *mut bingham_ahrs,
+    m: *const f64,
+    z: *const f64,
+) -> bingham_status {
+    guard("bingham_ahrs_set_state", || {
+        // SAFETY: caller contract.
+        let ahrs = unsafe { handle_mut("a", a)? };
+        need("m", m)?;
+        need("z", z)?;
+        // SAFETY: caller contract; 16 and 4 doubles.
+        let (ms, zs) = unsafe { (read("m", m, 16)?, read("z", z, 4)?) };
+        ahrs.inner.set_state(ms, zs)?;
+        Ok(())
+    })
+}
+
 /// The angular spread of the state (radians), as `bingham_angular_spread()`: `spread[0..3]`
 /// along the principal directions (columns 0..2 of the state's M), `spread[3]` the total (the
 /// RMS of `2 sin(θ/2)`, θ the rotation angle between the truth and the estimate under the
