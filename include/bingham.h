@@ -88,6 +88,22 @@
 #define BINGHAM_FILTER_MAX_CONCENTRATION 1e10
 
 /**
+ * The smallest sampling period (s) the AHRS accepts.
+ */
+#define BINGHAM_AHRS_MIN_SAMPLE_TIME 1e-6
+
+/**
+ * The largest sampling period (s) the AHRS accepts.
+ */
+#define BINGHAM_AHRS_MAX_SAMPLE_TIME 1e3
+
+/**
+ * The smallest process noise per step (rad) the AHRS accepts (`gyro_noise·√sample_time`): below
+ * it the noise's concentration leaves the moment matching's range.
+ */
+#define BINGHAM_AHRS_MIN_STEP_NOISE 1e-6
+
+/**
  * The result of every fallible `bingham_*` function.
  *
  * `BINGHAM_OK` (0) means success; every other value is an error, and then the function has
@@ -182,13 +198,14 @@ typedef struct bingham_ahrs bingham_ahrs;
 typedef struct bingham_filter bingham_filter;
 
 /**
- * Parameters of the AHRS (`bingham_ahrs_new()`). Fill it with `bingham_ahrs_params_default()`
- * (the defaults are the tuned set: one parameter set for all recordings, tuned on the BROAD
- * benchmark), then change fields if needed. All angles in radians, times in seconds.
+ * Parameters of the AHRS (`bingham_ahrs_params` in C, `AhrsParams` in Rust). The defaults —
+ * `bingham_ahrs_params_default()` in C, `AhrsParams::new(sample_time)` in Rust — are the tuned
+ * set: tuned once on the nine BROAD trials, one set for all recordings. Angles in radians,
+ * times in seconds. Fill it with the defaults, then change fields if needed.
  */
 typedef struct bingham_ahrs_params {
     /**
-     * Sampling period in seconds (> 0).
+     * Sampling period in seconds (1e-6 to 1e3).
      */
     double sample_time;
     /**

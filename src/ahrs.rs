@@ -57,8 +57,11 @@ pub const MAX_SAMPLE_TIME: f64 = 1e3;
 /// it the noise's concentration leaves the moment matching's range.
 pub const MIN_STEP_NOISE: f64 = 1e-6;
 
-/// Parameters of the AHRS. [`AhrsParams::new`] gives the defaults, tuned once on the nine BROAD
-/// trials (one set for all recordings).
+/// Parameters of the AHRS (`bingham_ahrs_params` in C, `AhrsParams` in Rust). The defaults —
+/// `bingham_ahrs_params_default()` in C, `AhrsParams::new(sample_time)` in Rust — are the tuned
+/// set: tuned once on the nine BROAD trials, one set for all recordings. Angles in radians,
+/// times in seconds. Fill it with the defaults, then change fields if needed.
+#[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AhrsParams {
     /// Sampling period in seconds (1e-6 to 1e3).

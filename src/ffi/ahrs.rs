@@ -8,110 +8,11 @@ use super::guard::{
 use super::status::bingham_status;
 use crate::ahrs::{Ahrs, AhrsParams};
 
-/// Parameters of the AHRS (`bingham_ahrs_new()`). Fill it with `bingham_ahrs_params_default()`
-/// (the defaults are the tuned set: one parameter set for all recordings, tuned on the BROAD
-/// benchmark), then change fields if needed. All angles in radians, times in seconds.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// The C name of [`AhrsParams`] (cbindgen renames the struct itself; this alias is for Rust
+/// code calling the C functions).
+/// cbindgen:ignore
 #[allow(non_camel_case_types)]
-pub struct bingham_ahrs_params {
-    /// Sampling period in seconds (> 0).
-    pub sample_time: f64,
-    /// Orientation process noise in rad/√s: the prediction adds isotropic rotation noise with
-    /// standard deviation `gyro_noise·√sample_time` per step (gyroscope noise, bias drift and
-    /// model error together).
-    pub gyro_noise: f64,
-    /// Angular standard deviation (rad) of one accelerometer direction sample as a measurement
-    /// of "up" (`κ = 1/acc_noise²`).
-    pub acc_noise: f64,
-    /// Linear-acceleration rejection scale in m/s²: `κ` is divided by
-    /// `1 + ((|ā| − gravity)/acc_reject)²`, `ā` the low-passed accelerometer.
-    pub acc_reject: f64,
-    /// Time constant (s) of the accelerometer's low-pass filter in the gyroscope-integrated
-    /// (quasi-inertial) frame: linear accelerations average out there, gravity does not.
-    pub acc_tau: f64,
-    /// Time constant (s) of the magnetometer's low-pass filter in the same frame.
-    pub mag_tau: f64,
-    /// Magnitude of gravity in m/s².
-    pub gravity: f64,
-    /// Angular standard deviation (rad) of one magnetometer heading sample (`κ = 1/mag_noise²`).
-    pub mag_noise: f64,
-    /// Relative tolerance on the magnetic field's norm before a sample counts as disturbed.
-    pub mag_norm_tol: f64,
-    /// Tolerance (rad) on the field's dip angle before a sample counts as disturbed.
-    pub mag_dip_tol: f64,
-    /// Time constant (s) with which the reference norm and dip follow undisturbed samples.
-    pub mag_ref_time: f64,
-    /// A disturbance whose norm and dip stay steady this long (s) becomes the new reference.
-    pub mag_new_time: f64,
-    /// Time constant (s) of the gyroscope-bias estimation from the observations' corrections
-    /// during motion (`0` disables it).
-    pub bias_time: f64,
-    /// Largest gyroscope bias (rad/s) per axis the estimate may reach.
-    pub bias_max: f64,
-    /// Time (s) the sensor must be still before the bias is taken from the gyroscope.
-    pub rest_time: f64,
-    /// Rest threshold on the gyroscope's deviation from its low-pass value (rad/s).
-    pub rest_gyro: f64,
-    /// Rest threshold on the accelerometer's deviation from its low-pass value (m/s²).
-    pub rest_acc: f64,
-    /// Time constant (s) of the bias estimate while at rest.
-    pub rest_bias_time: f64,
-    /// Angular standard deviation (rad) of the initial tilt and heading.
-    pub init_std: f64,
-}
-
-impl From<&bingham_ahrs_params> for AhrsParams {
-    fn from(p: &bingham_ahrs_params) -> AhrsParams {
-        AhrsParams {
-            sample_time: p.sample_time,
-            gyro_noise: p.gyro_noise,
-            acc_noise: p.acc_noise,
-            acc_reject: p.acc_reject,
-            acc_tau: p.acc_tau,
-            mag_tau: p.mag_tau,
-            gravity: p.gravity,
-            mag_noise: p.mag_noise,
-            mag_norm_tol: p.mag_norm_tol,
-            mag_dip_tol: p.mag_dip_tol,
-            mag_ref_time: p.mag_ref_time,
-            mag_new_time: p.mag_new_time,
-            bias_time: p.bias_time,
-            bias_max: p.bias_max,
-            rest_time: p.rest_time,
-            rest_gyro: p.rest_gyro,
-            rest_acc: p.rest_acc,
-            rest_bias_time: p.rest_bias_time,
-            init_std: p.init_std,
-        }
-    }
-}
-
-impl From<&AhrsParams> for bingham_ahrs_params {
-    fn from(p: &AhrsParams) -> bingham_ahrs_params {
-        bingham_ahrs_params {
-            sample_time: p.sample_time,
-            gyro_noise: p.gyro_noise,
-            acc_noise: p.acc_noise,
-            acc_reject: p.acc_reject,
-            acc_tau: p.acc_tau,
-            mag_tau: p.mag_tau,
-            gravity: p.gravity,
-            mag_noise: p.mag_noise,
-            mag_norm_tol: p.mag_norm_tol,
-            mag_dip_tol: p.mag_dip_tol,
-            mag_ref_time: p.mag_ref_time,
-            mag_new_time: p.mag_new_time,
-            bias_time: p.bias_time,
-            bias_max: p.bias_max,
-            rest_time: p.rest_time,
-            rest_gyro: p.rest_gyro,
-            rest_acc: p.rest_acc,
-            rest_bias_time: p.rest_bias_time,
-            init_std: p.init_std,
-        }
-    }
-}
+pub type bingham_ahrs_params = AhrsParams;
 
 /// An attitude and heading reference system on the recursive Bingham filter: gyroscope
 /// propagation, accelerometer and magnetometer as exact Bayes updates of a Bingham distribution
@@ -146,14 +47,14 @@ pub struct bingham_ahrs {
 #[no_mangle]
 pub unsafe extern "C" fn bingham_ahrs_params_default(
     sample_time: f64,
-    p: *mut bingham_ahrs_params,
+    p: *mut AhrsParams,
 ) -> bingham_status {
     guard("bingham_ahrs_params_default", || {
         need("p", p)?;
         let params = AhrsParams::new(sample_time);
         params.validate()?;
         // SAFETY: checked non-NULL and aligned.
-        unsafe { *p = bingham_ahrs_params::from(&params) };
+        unsafe { *p = params };
         Ok(())
     })
 }
@@ -169,14 +70,14 @@ pub unsafe extern "C" fn bingham_ahrs_params_default(
 /// `p`: a readable `bingham_ahrs_params`; `out`: a writable `bingham_ahrs *`.
 #[no_mangle]
 pub unsafe extern "C" fn bingham_ahrs_new(
-    p: *const bingham_ahrs_params,
+    p: *const AhrsParams,
     out: *mut *mut bingham_ahrs,
 ) -> bingham_status {
     guard("bingham_ahrs_new", || {
         // SAFETY: caller contract.
         let params = unsafe { handle("p", p)? };
         need("out", out)?;
-        let inner = Ahrs::new(&AhrsParams::from(params))?;
+        let inner = Ahrs::new(params)?;
         // SAFETY: `out` checked non-NULL and aligned.
         unsafe { write_handle(out, bingham_ahrs { inner }) };
         Ok(())
