@@ -10,7 +10,7 @@ mod common;
 
 use bingham::ahrs::{Ahrs, AhrsParams};
 use bingham::Error;
-use common::Rng64;
+use common::{rot, Rng64};
 use std::f64::consts::PI;
 
 const G: f64 = 9.81;
@@ -42,28 +42,6 @@ fn qexp(w: &[f64; 3]) -> [f64; 4] {
 fn normalize4(q: &[f64; 4]) -> [f64; 4] {
     let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
     [q[0] / n, q[1] / n, q[2] / n, q[3] / n]
-}
-
-/// `R(q)` (sensor → world), textbook formula.
-fn rot(q: &[f64; 4]) -> [[f64; 3]; 3] {
-    let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
-    [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
-    ]
 }
 
 /// `R(q)ᵀ v` (world → sensor).

@@ -13,7 +13,7 @@ use bingham::observation::{
 };
 use bingham::quaternion::{compose, q4};
 use bingham::{Bingham, Error};
-use common::Rng64;
+use common::{rot, Rng64};
 use nalgebra::{DMatrix, DVector, Matrix4};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
@@ -21,28 +21,6 @@ use std::f64::consts::PI;
 
 // ---------------------------------------------------------------------------------------------
 // Independent references
-
-/// `R(q)` of a unit quaternion (scalar first, `v_world = q v q*`), the textbook formula.
-fn rot(q: &[f64; 4]) -> [[f64; 3]; 3] {
-    let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
-    [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
-    ]
-}
 
 fn matvec(r: &[[f64; 3]; 3], v: &[f64; 3]) -> [f64; 3] {
     [
