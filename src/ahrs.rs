@@ -690,8 +690,9 @@ impl Ahrs {
 
     /// Processes `gyr.len()` samples (`acc` the same length, `mag` too or `None`), writing the
     /// quaternion after each into `quat` (and, if given, the total angular spread into
-    /// `spread`). Stops at the first refused sample: the samples before it are processed and
-    /// their outputs written; the error names the index.
+    /// `spread`, see [`Ahrs::update_spread`]). Stops at the first refused sample: the samples
+    /// before it are processed and their outputs written, the refused one changes nothing; the
+    /// error names the index.
     pub fn update_batch(
         &mut self,
         gyr: &[[f64; 3]],
@@ -711,16 +712,34 @@ impl Ahrs {
             ));
         }
         for k in 0..n {
-            self.update(&gyr[k], &acc[k], mag.map(|m| &m[k]))
-                .map_err(|e| prefix(e, k))?;
-            quat[k] = self.quaternion();
-            if let Some(s) = spread.as_deref_mut() {
-                let mut out = [0.0; 4];
-                self.angular_spread(&mut out).map_err(|e| prefix(e, k))?;
-                s[k] = out[3];
+            let m = mag.map(|m| &m[k]);
+            match spread.as_deref_mut() {
+                Some(s) => {
+                    s[k] = self
+                        .update_spread(&gyr[k], &acc[k], m)
+                        .map_err(|e| prefix(e, k))?
+                }
+                None => self.update(&gyr[k], &acc[k], m).map_err(|e| prefix(e, k))?,
             }
+            quat[k] = self.quaternion();
         }
         Ok(())
+    }
+
+    /// [`Ahrs::update`] followed by the total angular spread (radians) of the new state, as one
+    /// step: if the spread cannot be evaluated, the sample is refused and nothing changes.
+    pub fn update_spread(
+        &mut self,
+        gyr: &[f64; 3],
+        acc: &[f64; 3],
+        mag: Option<&[f64; 3]>,
+    ) -> Result<f64> {
+        let mut next = self.clone();
+        next.update(gyr, acc, mag)?;
+        let mut out = [0.0; 4];
+        next.angular_spread(&mut out)?;
+        *self = next;
+        Ok(out[3])
     }
 }
 

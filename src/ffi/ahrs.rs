@@ -3,7 +3,7 @@
 
 use super::guard::{
     free_handle, guard, handle, handle_mut, need, optional, output, read, read_raw, write,
-    write_handle, Failure,
+    write_handle, Failure, FfiResult,
 };
 use super::status::bingham_status;
 use crate::ahrs::{Ahrs, AhrsParams};
@@ -234,19 +234,20 @@ unsafe fn batch(
     need("quat", quat)?;
     let has_mag = optional("mag", mag)?;
     let has_spread = optional("spread", spread)?;
-    let n3 = super::guard::len2("gyr", n, 3)?;
-    let n4 = super::guard::len2("quat", n, 4)?;
-    // SAFETY: caller contract: n*3 readable, n*4 (and n) writable doubles, not overlapping.
+    super::guard::len2("gyr", n, 3)?;
+    super::guard::len2("quat", n, 4)?;
+    // SAFETY: caller contract: n rows of 3 readable and of 4 (and n) writable doubles, not
+    // overlapping; `[f64; K]` has the alignment of `f64` (checked by `need`) and no padding.
     let (g, ac, m, q, s) = unsafe {
         (
-            read_raw("gyr", gyr, n3)?,
-            read_raw("acc", acc, n3)?,
+            rows::<3>("gyr", gyr, n)?,
+            rows::<3>("acc", acc, n)?,
             if has_mag {
-                Some(read_raw("mag", mag, n3)?)
+                Some(rows::<3>("mag", mag, n)?)
             } else {
                 None
             },
-            output("quat", quat, n4)?,
+            rows_mut::<4>("quat", quat, n)?,
             if has_spread {
                 Some(output("spread", spread, n)?)
             } else {
@@ -254,23 +255,38 @@ unsafe fn batch(
             },
         )
     };
-    let mut s = s;
-    for k in 0..n {
-        let sample = |x: &[f64]| [x[3 * k], x[3 * k + 1], x[3 * k + 2]];
-        let mk = m.map(sample);
-        ahrs.inner
-            .update(&sample(g), &sample(ac), mk.as_ref())
-            .map_err(|e| Failure::from(e).context(format_args!("sample {k}")))?;
-        q[4 * k..4 * k + 4].copy_from_slice(&ahrs.inner.quaternion());
-        if let Some(s) = s.as_deref_mut() {
-            let mut out = [0.0; 4];
-            ahrs.inner
-                .angular_spread(&mut out)
-                .map_err(|e| Failure::from(e).context(format_args!("sample {k}")))?;
-            s[k] = out[3];
-        }
-    }
+    ahrs.inner.update_batch(g, ac, m, q, s)?;
     Ok(())
+}
+
+/// `n` rows of `K` doubles at `p` (values not checked: bad samples are refused one at a time).
+///
+/// # Safety
+/// As `read_raw` with `n * K` doubles.
+unsafe fn rows<'a, const K: usize>(
+    name: &str,
+    p: *const f64,
+    n: usize,
+) -> FfiResult<&'a [[f64; K]]> {
+    // SAFETY: forwarded contract; the length check happened in `read_raw`.
+    let flat = unsafe { read_raw(name, p, n * K)? };
+    // SAFETY: `[f64; K]` has the size of K doubles and the alignment of one.
+    Ok(unsafe { std::slice::from_raw_parts(flat.as_ptr().cast::<[f64; K]>(), n) })
+}
+
+/// `n` writable rows of `K` doubles at `p`.
+///
+/// # Safety
+/// As `output` with `n * K` doubles.
+unsafe fn rows_mut<'a, const K: usize>(
+    name: &str,
+    p: *mut f64,
+    n: usize,
+) -> FfiResult<&'a mut [[f64; K]]> {
+    // SAFETY: forwarded contract.
+    let flat = unsafe { output(name, p, n * K)? };
+    // SAFETY: as in `rows`.
+    Ok(unsafe { std::slice::from_raw_parts_mut(flat.as_mut_ptr().cast::<[f64; K]>(), n) })
 }
 
 /// The current orientation estimate (the mode of the Bingham state): sensor → world (ENU),
