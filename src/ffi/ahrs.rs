@@ -198,7 +198,9 @@ pub unsafe extern "C" fn bingham_ahrs_update_batch(
 }
 
 /// As `bingham_ahrs_update_batch()`, also writing the total angular spread (radians, see
-/// `bingham_ahrs_angular_spread()`) after each sample into `spread` (n doubles, or `NULL`).
+/// `bingham_ahrs_angular_spread()`) after each sample into `spread` (n doubles, or `NULL`). A
+/// sample whose spread cannot be evaluated (`BINGHAM_ERR_NUMERICAL`) is refused like a bad one:
+/// it changes nothing and stops the batch.
 ///
 /// # Safety
 /// As `bingham_ahrs_update_batch()`; `spread`: `NULL` or n writable doubles.
@@ -350,7 +352,8 @@ pub unsafe extern "C" fn bingham_ahrs_state(
 ///   `bingham_rotate_left()`).
 ///
 /// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `m`, `z`), `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf,
-/// `m` not orthogonal). On error the AHRS is unchanged.
+/// `m` not orthogonal, the entries of `z` spanning more than the largest double). On error the
+/// AHRS is unchanged.
 ///
 /// # Safety
 /// `a`: a live handle; `m`: 16 and `z`: 4 readable doubles.
@@ -377,7 +380,9 @@ pub unsafe extern "C" fn bingham_ahrs_set_state(
 /// RMS of `2 sin(θ/2)`, θ the rotation angle between the truth and the estimate under the
 /// state: ≈ the RMS angular error when the filter is calibrated).
 ///
-/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `spread`). On error nothing is written.
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `spread`), `BINGHAM_ERR_NUMERICAL` (the moments
+/// of an extremely concentrated state, e.g. one set with `bingham_ahrs_set_state()` near the
+/// largest double, cannot be evaluated). On error nothing is written.
 ///
 /// # Safety
 /// `a`: a live handle; `spread`: 4 writable doubles.
