@@ -2,11 +2,12 @@
 #
 #   make demo                    build the library, then build and run the C/C++ examples
 #   make broad                   the AHRS vs VQF/Madgwick/Mahony on the BROAD trials (BROAD_DIR)
+#   make venv                    the Python package (pip install ./python) in $(TARGET_DIR)/venv
 #   make test                    everything CI runs (installs missing tools first, see `deps`)
 #   make sanitize                C/C++ tests and examples under ASan + UBSan + LSan (in `test`)
 #   make valgrind                the same programs and the C ABI fuzz harness under valgrind
 #   make fuzz                    long reliability runs: 10^7 fuzz cases, 10^6 filter steps
-#   make install PREFIX=/opt/x   shared + static library, header, pkg-config file
+#   make install PREFIX=/opt/x   shared + static library, headers (C, C++), pkg-config file, CMake package
 #   make header                  regenerate include/bingham.h from src/ffi/ (commit the result)
 #
 # Uses cargo's default target directory (target/), or CARGO_TARGET_DIR if set.
@@ -25,16 +26,28 @@ DESTDIR ?=
 
 VERSION := $(shell sed -n 's/^version *= *"\([^"]*\)".*/\1/p' Cargo.toml | head -n 1)
 MAJOR := $(firstword $(subst ., ,$(VERSION)))
+MINOR := $(word 2,$(subst ., ,$(VERSION)))
 TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
 RELEASE := $(TARGET_DIR)/release
 DEMO_DIR := $(TARGET_DIR)/demo
 # pkg-config file: paths below the prefix are written relative to ${prefix}
 PC_LIBDIR := $(patsubst $(PREFIX)/%,$${prefix}/%,$(LIBDIR))
 PC_INCLUDEDIR := $(patsubst $(PREFIX)/%,$${prefix}/%,$(INCLUDEDIR))
+# CMake package (cmake/*.cmake.in): directories relative to the prefix, which the config finds
+# from its own location (<libdir>/cmake/bingham/) -- or absolute if LIBDIR is not below PREFIX
+CMAKEDIR := $(LIBDIR)/cmake/bingham
+CMAKE_LIBDIR := $(patsubst $(PREFIX)/%,%,$(LIBDIR))
+CMAKE_INCLUDEDIR := $(patsubst $(PREFIX)/%,%,$(INCLUDEDIR))
+CMAKE_PREFIX := $(if $(filter /%,$(CMAKE_LIBDIR)),$(PREFIX),$${CMAKE_CURRENT_LIST_DIR}/../..$(subst $(subst ,, ),,$(foreach c,$(subst /, ,$(CMAKE_LIBDIR)),/..)))
+SIZEOF_VOID_P := $(shell echo $$(( $$(getconf LONG_BIT) / 8 )))
 # what a program linking libbingham.a needs besides the archive (Rust's standard library)
 STATIC_LIBS := -lpthread -ldl -lm
+EIGEN3_INCLUDE_DIR ?= /usr/include/eigen3
+# The virtual environment with the Python package (python/) installed, see `venv`
+VENV := $(abspath $(TARGET_DIR))/venv
+VENV_PYTHON := $(VENV)/bin/python
 
-.PHONY: build header demo broad test deps fmt-check clippy rust-test python-test install install-test \
+.PHONY: build header demo broad venv test deps fmt-check clippy rust-test python-test install install-test \
         uninstall clean sanitize valgrind fuzz long
 
 build:
@@ -43,14 +56,16 @@ build:
 header:
 	BINGHAM_WRITE_HEADER=1 $(CARGO) test --release --test header
 
-demo: build
+demo: build venv
 	@mkdir -p $(DEMO_DIR)
-	@set -e; for src in examples/c/*.c examples/c/*.cpp; do \
+	@set -e; for src in examples/c/*.c examples/c/*.cpp examples/cpp/*.cpp; do \
 	  [ -e "$$src" ] || continue; \
 	  exe=$(DEMO_DIR)/$$(basename "$${src%.*}"); \
 	  case "$$src" in \
 	    *.c)   $(CC) -std=c99 -O2 -Wall -Wextra -Werror -pedantic -Iinclude "$$src" \
 	             $(RELEASE)/libbingham.a $(STATIC_LIBS) -o "$$exe" ;; \
+	    examples/cpp/*) $(CXX) -std=c++17 -O2 -Wall -Wextra -Werror -pedantic -Iinclude \
+	             -isystem $(EIGEN3_INCLUDE_DIR) "$$src" $(RELEASE)/libbingham.a $(STATIC_LIBS) -o "$$exe" ;; \
 	    *.cpp) $(CXX) -std=c++11 -O2 -Wall -Wextra -Werror -pedantic -Iinclude "$$src" \
 	             $(RELEASE)/libbingham.a $(STATIC_LIBS) -o "$$exe" ;; \
 	  esac; \
@@ -59,17 +74,15 @@ demo: build
 	@echo "==== plot of one run of examples/c/axis_tracking.c (truth, Bingham mode with 95 % interval, Kalman)"
 	@$(DEMO_DIR)/axis_tracking $(DEMO_DIR)/axis_tracking_run.csv > /dev/null
 	$(PYTHON) scripts/plot_run.py $(DEMO_DIR)/axis_tracking_run.csv $(DEMO_DIR)/axis_tracking_run.svg
-	@echo; echo "==== examples/python/track_quaternion.py (20 runs)"
-	@if $(PYTHON) -c 'import numpy' 2>/dev/null; then \
-	  BINGHAM_LIB=$(abspath $(RELEASE))/libbingham.so $(PYTHON) examples/python/track_quaternion.py 20; \
-	else echo "(skipped: NumPy is not installed; \`make deps\` installs it)"; fi
+	@echo; echo "==== examples/python/track_quaternion.py (20 runs, the package installed by \`make venv\`)"
+	@$(VENV_PYTHON) examples/python/track_quaternion.py 20
 
 # Orientation accuracy on real IMU data (BROAD, CC BY 4.0): our AHRS against VQF, Madgwick and
 # Mahony (the peers need the Python packages vqf and ahrs: `make deps`); plot of trial 07.
 BROAD_DIR ?= ../shared/data/broad
 
-broad: build
-	BINGHAM_LIB=$(abspath $(RELEASE))/libbingham.so $(PYTHON) examples/python/broad.py $(BROAD_DIR) \
+broad: venv
+	$(VENV_PYTHON) examples/python/broad.py $(BROAD_DIR) \
 	  --plot $(TARGET_DIR)/broad_trial07.svg
 
 # --- tests ---------------------------------------------------------------------------------
@@ -78,7 +91,7 @@ test: deps fmt-check clippy build rust-test python-test install-test sanitize
 	@echo "make test: all passed"
 
 # Installs what the tests need when it is missing (Debian/Ubuntu): a C++ compiler, Eigen,
-# pkg-config, binutils, and NumPy/pytest for the Python binding.
+# pkg-config, binutils, python3-venv, and NumPy/pytest for the Python package.
 deps:
 	@PYTHON="$(PYTHON)" CXX="$(CXX)" scripts/install-deps.sh
 
@@ -92,8 +105,22 @@ clippy:
 rust-test:
 	$(CARGO) test --release --no-fail-fast
 
-python-test: build
-	cd examples/python && BINGHAM_LIB=$(abspath $(RELEASE))/libbingham.so $(PYTHON) -m pytest -q -p no:cacheprovider
+# The pytest suite (python/tests/) run by the venv's Python against the INSTALLED package (from
+# python/tests/, so the checkout's python/bingham/ is not on the path; BINGHAM_LIB unset, so the
+# bundled library is loaded): fails when the package does not build or install.
+python-test: venv
+	@$(VENV_PYTHON) -c 'import pytest' 2>/dev/null || $(VENV_PYTHON) -m pip install pytest
+	cd python/tests && env -u BINGHAM_LIB $(VENV_PYTHON) -m pytest -q -p no:cacheprovider
+
+# The Python package in a virtual environment ($(TARGET_DIR)/venv), for python-test, demo and
+# broad: `pip install ./python` builds the library with cargo (setuptools-rust, which pip fetches
+# for the build) and ships it inside the package. --system-site-packages reuses NumPy, pytest,
+# vqf and ahrs of the system Python (`make deps`). Reinstalled on every run (cargo rebuilds only
+# what changed).
+venv:
+	@test -x $(VENV_PYTHON) || $(PYTHON) -m venv --system-site-packages $(VENV)
+	$(VENV_PYTHON) -m pip install --disable-pip-version-check --progress-bar off ./python
+	@$(VENV_PYTHON) -c 'import bingham; print("bingham", bingham.__version__, "loads", bingham.library_path())'
 
 # Installs into a temporary prefix and builds/runs a C++11 program against it via pkg-config.
 install-test: build
@@ -127,8 +154,8 @@ long:
 
 install:
 	@test -f $(RELEASE)/libbingham.so -a -f $(RELEASE)/libbingham.a || $(MAKE) --no-print-directory build
-	install -d $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(INCLUDEDIR)
-	install -m 644 include/bingham.h $(DESTDIR)$(INCLUDEDIR)/bingham.h
+	install -d $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(INCLUDEDIR) $(DESTDIR)$(CMAKEDIR)
+	install -m 644 include/bingham.h include/bingham.hpp include/bingham_eigen.hpp $(DESTDIR)$(INCLUDEDIR)/
 	install -m 644 $(RELEASE)/libbingham.a $(DESTDIR)$(LIBDIR)/libbingham.a
 	install -m 755 $(RELEASE)/libbingham.so $(DESTDIR)$(LIBDIR)/libbingham.so.$(VERSION)
 	ln -sf libbingham.so.$(VERSION) $(DESTDIR)$(LIBDIR)/libbingham.so.$(MAJOR)
@@ -136,12 +163,21 @@ install:
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBDIR@|$(PC_LIBDIR)|g' \
 	    -e 's|@INCLUDEDIR@|$(PC_INCLUDEDIR)|g' -e 's|@VERSION@|$(VERSION)|g' \
 	    bingham.pc.in > $(DESTDIR)$(LIBDIR)/pkgconfig/bingham.pc
+	set -e; for f in binghamConfig binghamConfigVersion; do \
+	  sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@MAJOR@|$(MAJOR)|g' -e 's|@MINOR@|$(MINOR)|g' \
+	      -e 's|@CMAKE_PREFIX@|$(CMAKE_PREFIX)|g' -e 's|@CMAKE_LIBDIR@|$(CMAKE_LIBDIR)|g' \
+	      -e 's|@CMAKE_INCLUDEDIR@|$(CMAKE_INCLUDEDIR)|g' -e 's|@SIZEOF_VOID_P@|$(SIZEOF_VOID_P)|g' \
+	      cmake/$$f.cmake.in > $(DESTDIR)$(CMAKEDIR)/$$f.cmake; \
+	done
 	@echo "installed bingham $(VERSION) into $(DESTDIR)$(PREFIX)"
 
 uninstall:
-	rm -f $(DESTDIR)$(INCLUDEDIR)/bingham.h $(DESTDIR)$(LIBDIR)/libbingham.a \
+	rm -f $(DESTDIR)$(INCLUDEDIR)/bingham.h $(DESTDIR)$(INCLUDEDIR)/bingham.hpp \
+	      $(DESTDIR)$(INCLUDEDIR)/bingham_eigen.hpp $(DESTDIR)$(LIBDIR)/libbingham.a \
 	      $(DESTDIR)$(LIBDIR)/libbingham.so $(DESTDIR)$(LIBDIR)/libbingham.so.$(MAJOR) \
-	      $(DESTDIR)$(LIBDIR)/libbingham.so.$(VERSION) $(DESTDIR)$(LIBDIR)/pkgconfig/bingham.pc
+	      $(DESTDIR)$(LIBDIR)/libbingham.so.$(VERSION) $(DESTDIR)$(LIBDIR)/pkgconfig/bingham.pc \
+	      $(DESTDIR)$(CMAKEDIR)/binghamConfig.cmake $(DESTDIR)$(CMAKEDIR)/binghamConfigVersion.cmake
+	-rmdir $(DESTDIR)$(CMAKEDIR) 2>/dev/null
 
 clean:
 	$(CARGO) clean

@@ -1,6 +1,10 @@
 # Shared by scripts/sanitize.sh and scripts/valgrind.sh (sourced, not run): finds the C/C++
-# programs (c_tests/*.c, c_tests/*.cpp, examples/c/*.c, examples/c/*.cpp), builds them against
-# the static library with extra flags, and runs them.
+# programs (c_tests/*.c, c_tests/*.cpp, examples/c/*.c, examples/c/*.cpp, examples/cpp/*.cpp),
+# builds them against the static library with extra flags, and runs them.
+#
+# Standards: C programs are built as C99, C++ programs as C++11, unless the source has a line
+# `// standards: c++17 c++20` (the C++ wrapper's tests and examples): then it is built and run
+# once per listed standard (the entry is SOURCE@STANDARD).
 #
 # Environment: CARGO_TARGET_DIR (default target), CARGO (default cargo), CC (default cc),
 # CXX (default c++), EIGEN3_INCLUDE_DIR (default /usr/include/eigen3).
@@ -30,11 +34,19 @@ ensure_library() {
     [ -f "$LIB" ] || { echo "no $LIB after cargo build" >&2; return 1; }
 }
 
-# Prints the program sources, one per line.
+# Prints the programs, one per line: SOURCE, or SOURCE@STANDARD for each standard a source
+# lists in a `// standards: ...` line.
 program_sources() {
-    local f
-    for f in "$ROOT"/c_tests/*.c "$ROOT"/c_tests/*.cpp "$ROOT"/examples/c/*.c "$ROOT"/examples/c/*.cpp; do
-        [ -e "$f" ] && echo "$f"
+    local f stds s
+    for f in "$ROOT"/c_tests/*.c "$ROOT"/c_tests/*.cpp "$ROOT"/examples/c/*.c "$ROOT"/examples/c/*.cpp \
+        "$ROOT"/examples/cpp/*.cpp; do
+        [ -e "$f" ] || continue
+        stds=$(sed -n 's|^// standards: *||p' "$f" | head -n 1)
+        if [ -z "$stds" ]; then
+            echo "$f"
+        else
+            for s in $stds; do echo "$f@$s"; done
+        fi
     done
 }
 
@@ -44,8 +56,12 @@ program_sources() {
 build_program() {
     local src=$1 outdir=$2
     shift 2
-    local name exe compiler std extra=()
+    local name exe compiler std std_override="" extra=()
+    case "$src" in
+        *@*) std_override=${src##*@} src=${src%@*} ;;
+    esac
     name=$(basename "${src%.*}")
+    [ -n "$std_override" ] && name="${name}_${std_override//+/x}"
     case "$src" in
         "$ROOT"/examples/*) name="example_$name" ;;
     esac
@@ -54,7 +70,8 @@ build_program() {
         *.cpp) compiler=$CXX std=-std=c++11 ;;
         *) compiler=$CC std=-std=c99 ;;
     esac
-    if grep -q '#include <Eigen/' "$src"; then
+    [ -n "$std_override" ] && std="-std=$std_override"
+    if grep -qE '#include [<"](Eigen/|bingham_eigen.hpp)' "$src"; then
         local e
         if ! e=$(eigen_dir); then
             echo "skipping $src: Eigen 3 not found (install libeigen3-dev or set EIGEN3_INCLUDE_DIR)" >&2

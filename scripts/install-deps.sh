@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what `make test` needs, only when it is missing (Debian/Ubuntu; run as root or with
 # sudo available): a C++ compiler, Eigen 3, pkg-config, binutils (readelf/nm), Python 3 with
-# pip, NumPy + pytest for the Python binding's tests, and vqf + ahrs (the peer filters of
+# pip and venv (`make venv` installs the Python package, python/, into a virtual environment),
+# NumPy + pytest for the Python package's tests, and vqf + ahrs (the peer filters of
 # `make broad`, examples/python/broad.py).
 set -euo pipefail
 
@@ -14,10 +15,19 @@ missing=()
 command -v "$cxx" >/dev/null 2>&1 || missing+=(g++)
 [ -f /usr/include/eigen3/Eigen/Dense ] || [ -n "${EIGEN3_INCLUDE_DIR:-}" ] || missing+=(libeigen3-dev)
 command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)
+command -v cmake >/dev/null 2>&1 || missing+=(cmake)  # install-test: the CMake package consumer
 command -v readelf >/dev/null 2>&1 && command -v nm >/dev/null 2>&1 || missing+=(binutils)
 command -v "$python" >/dev/null 2>&1 || missing+=(python3)
 if ! "$python" -c 'import numpy, pytest, vqf, ahrs' >/dev/null 2>&1 && ! "$python" -m pip --version >/dev/null 2>&1; then
     missing+=(python3-pip)
+fi
+# `python3 -m venv` needs ensurepip, which Debian ships separately (python3-venv)
+if command -v "$python" >/dev/null 2>&1; then
+    venv_probe=$(mktemp -d)
+    "$python" -m venv "$venv_probe/v" >/dev/null 2>&1 || missing+=(python3-venv)
+    rm -rf "$venv_probe"
+else
+    missing+=(python3-venv)
 fi
 if [ ${#missing[@]} -gt 0 ]; then
     echo "install-deps: installing ${missing[*]}"

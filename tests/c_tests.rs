@@ -264,3 +264,31 @@ fn c_vector_and_ahrs_api() {
     let exe = build("ahrs_api.c", "ahrs_api", "c99", &[], Link::Static);
     run(&exe);
 }
+
+/// The C++17 wrapper (`include/bingham.hpp`) without Eigen, built as C++17 and as C++20.
+#[test]
+fn cpp_wrapper_plain() {
+    for std in ["c++17", "c++20"] {
+        let name = format!("wrapper_plain_{}", std.replace('+', "x"));
+        let exe = build("wrapper_plain.cpp", &name, std, &["-Wshadow"], Link::Static);
+        run(&exe);
+    }
+}
+
+/// The wrapper's Eigen overloads (`include/bingham_eigen.hpp`), built as C++17 and as C++20.
+#[test]
+fn cpp_wrapper_eigen() {
+    let inc = eigen_include();
+    let inc = inc.to_str().expect("UTF-8 path");
+    for std in ["c++17", "c++20"] {
+        let name = format!("wrapper_eigen_{}", std.replace('+', "x"));
+        let exe = build(
+            "wrapper_eigen.cpp",
+            &name,
+            std,
+            &["-isystem", inc],
+            Link::Static,
+        );
+        run(&exe);
+    }
+}

@@ -33,7 +33,8 @@ samples (1 = honest, > 1 = overconfident).
 ``--plot FILE.svg`` draws the total error over time of one trial (``--trial``, default 07) for
 every filter (hand-written SVG, no plotting library needed); ``--json OUT.json`` writes all the
 numbers. Peers whose package is missing are skipped with a note (``pip install vqf ahrs``).
-The library is found as described in ``bingham.py`` (``BINGHAM_LIB`` or ``target/release``).
+Needs the ``bingham`` Python package: ``pip install ./python`` from the repository root (``make
+broad`` installs it into a virtual environment and runs this program with it).
 """
 
 import argparse
@@ -48,7 +49,6 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, HERE)
 
 ATTRIBUTION = ("BROAD (Laidig, Caruso, Cereatti, Seel, Data 6(7):72, 2021, "
                "doi:10.3390/data6070072), CC BY 4.0")
@@ -95,9 +95,9 @@ def _bingham():
     try:
         import bingham
     except Exception as e:  # noqa: BLE001 -- any failure only skips our filter
-        return f"cannot import bingham.py: {e}"
+        return f"cannot import the bingham package ({e}): pip install ./python"
     if not hasattr(bingham, "Ahrs"):
-        return "bingham.py has no Ahrs yet"
+        return "the installed bingham package has no Ahrs yet"
     return bingham
 
 

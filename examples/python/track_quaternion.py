@@ -20,18 +20,20 @@ one mode of each Bingham density by Monte Carlo, measurement mirrored to the pre
 hemisphere, estimate normalized after each update). Error per step: ``min(angle, pi - angle)``
 between truth and estimate in R^4; per run the RMSE over the steps.
 
-The library is found as described in ``bingham.py`` (``BINGHAM_LIB`` or ``target/release``).
+Needs the ``bingham`` Python package: ``pip install ./python`` from the repository root (``make
+demo`` installs it into a virtual environment and runs this program with it).
 """
 
 import math
-import os
 import sys
 import time
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import bingham as bh  # noqa: E402
+try:
+    import bingham as bh
+except ImportError as e:
+    sys.exit(f"{e}: install the bingham package first, `pip install ./python` from the repository root")
 
 STEPS = 100
 FIT_SAMPLES = 100_000

@@ -1,8 +1,12 @@
-"""ctypes binding of the bingham C library (Bingham distributions on spheres).
+"""bingham: Bingham distributions on spheres, the recursive Bingham filter and the Bingham AHRS.
 
-Every function of ``include/bingham.h`` is bound with its argument and result types
-(``lib()`` returns the configured ``ctypes.CDLL``); the Python functions below take and return
-NumPy arrays and raise :class:`BinghamError` on any status other than ``BINGHAM_OK``.
+The Python binding of the ``bingham`` Rust library, through its C ABI (``include/bingham.h``) and
+``ctypes``: the package ships the compiled library (``bingham/_lib/libbingham*.so``, built by
+``pip install ./python`` from the repository). Every function of the header is bound with its
+argument and result types (``lib()`` returns the configured ``ctypes.CDLL``); the Python functions
+below take any array-like (lists, NumPy arrays) and return NumPy ``float64`` arrays, and raise
+:class:`BinghamError` (with the library's status and message) on any status other than
+``BINGHAM_OK``; a wrongly shaped argument raises :class:`ValueError` before the library is called.
 
 Conventions (the same as in C and Rust):
 
@@ -10,24 +14,39 @@ Conventions (the same as in C and Rust):
   measure (F(0) = 2π, 4π, 2π² for d = 2, 3, 4); d = 2..64.
 * ``m``: d×d orthogonal, columns are the principal directions, the last column is the mode.
 * ``z``: length d, any order and shift on input; outputs sorted ascending with ``z[-1] == 0``.
-* Quaternions are scalar first ``(w, x, y, z)``; complex numbers are ``(re, im)``.
+* Quaternions are scalar first ``(w, x, y, z)``; complex numbers are ``(re, im)``. (Eigen's
+  ``coeffs()``, ROS and SciPy's ``as_quat()`` are ``(x, y, z, w)``: reorder with
+  ``np.roll(q, 1)``.)
 
-The library is found via the environment variable ``BINGHAM_LIB`` (path of ``libbingham.so``),
-else in ``../../target/release`` or ``../../target/debug`` relative to this file, else by the
-system's library search (``libbingham.so.0`` installed by ``make install``).
+Which library is loaded (:func:`library_path` tells): the file named by the environment variable
+``BINGHAM_LIB`` if set (for developers: a freshly built ``target/release/libbingham.so``), else the
+one bundled in the package, else ``target/release`` or ``target/debug`` of the checkout when the
+package is used from the source tree, else the system's (``libbingham.so.0`` of ``make install``).
 
 Thread safety: the library is thread-safe; the error message read by :class:`BinghamError` is
 per thread, so exceptions carry the message of their own call.
 """
 
+from __future__ import annotations
+
 import ctypes
 import ctypes.util
 import enum
+import glob
 import os
+import re
+from typing import Any, Dict, Iterator, Optional, Tuple, Union
 
 import numpy as np
+import numpy.typing as npt
+
+ArrayLike = npt.ArrayLike
+#: The type of every array returned: a NumPy array of ``float64``.
+Array = npt.NDArray[np.float64]
 
 __all__ = [
+    "__version__",
+    "Array",
     "BinghamError",
     "Status",
     "MIN_DIM",
@@ -35,6 +54,7 @@ __all__ = [
     "ORTHOGONALITY_TOL",
     "UNIT_TOL",
     "lib",
+    "library_path",
     "version",
     "status_str",
     "last_error_message",
@@ -88,8 +108,8 @@ class BinghamError(Exception):
     library's ``bingham_status_str``) and ``message`` (the library's last error message).
     """
 
-    def __init__(self, status, message):
-        self.status = Status(status) if status in Status._value2member_map_ else status
+    def __init__(self, status: int, message: str) -> None:
+        self.status: Union[Status, int] = Status(status) if status in Status._value2member_map_ else status
         self.status_name = status_str(status)
         self.message = message
         super().__init__(f"{self.status_name} ({int(status)}): {message}")
@@ -159,21 +179,33 @@ _SIGNATURES = {
 }
 
 
-def _candidates():
+_HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def _bundled() -> Optional[str]:
+    """The library shipped in the package (``_lib/libbingham.abi3.so`` or similar), if any."""
+    found = sorted(glob.glob(os.path.join(_HERE, "_lib", "libbingham*.so")))
+    return found[0] if found else None
+
+
+def _candidates() -> Iterator[str]:
     env = os.environ.get("BINGHAM_LIB")
     if env:
         yield env
         return
-    here = os.path.dirname(os.path.abspath(__file__))
-    for profile in ("release", "debug"):
-        yield os.path.join(here, "..", "..", "target", profile, "libbingham.so")
+    bundled = _bundled()
+    if bundled:
+        yield bundled
+        return
+    for profile in ("release", "debug"):  # used from the checkout (python/bingham/)
+        yield os.path.join(_HERE, "..", "..", "target", profile, "libbingham.so")
     found = ctypes.util.find_library("bingham")
     if found:
         yield found
     yield "libbingham.so.0"
 
 
-def _load():
+def _load() -> Tuple[ctypes.CDLL, str]:
     errors = []
     for path in _candidates():
         if os.sep in path and not os.path.exists(path):
@@ -191,28 +223,59 @@ def _load():
                 continue
             fn.restype = restype
             fn.argtypes = argtypes
-        return cdll
+        return cdll, (os.path.abspath(path) if os.sep in path else path)
     raise OSError(
-        "cannot load libbingham (set BINGHAM_LIB, or build with `cargo build --release`): "
-        + "; ".join(errors)
+        "cannot load libbingham (install the package with `pip install ./python` from the "
+        "repository, or set BINGHAM_LIB to a libbingham.so): " + "; ".join(errors)
     )
 
 
-_LIB = None
+_LIB: Optional[ctypes.CDLL] = None
+_LIB_PATH: Optional[str] = None
 
 
-def lib():
+def lib() -> ctypes.CDLL:
     """The loaded ``ctypes.CDLL`` with ``argtypes``/``restype`` set for every function."""
-    global _LIB
+    global _LIB, _LIB_PATH
     if _LIB is None:
-        _LIB = _load()
+        _LIB, _LIB_PATH = _load()
     return _LIB
+
+
+def library_path() -> str:
+    """The path (or the name given to the dynamic loader) of the loaded library."""
+    lib()
+    assert _LIB_PATH is not None
+    return _LIB_PATH
+
+
+def _package_version() -> str:
+    # used from the checkout (python/bingham/, e.g. with BINGHAM_LIB): the crate's version
+    cargo_toml = os.path.join(_HERE, "..", "..", "Cargo.toml")
+    if os.path.isfile(os.path.join(_HERE, "..", "setup.py")) and os.path.isfile(cargo_toml):
+        with open(cargo_toml, encoding="utf-8") as f:
+            found = re.search(r'^version\s*=\s*"([^"]+)"', f.read(), re.M)
+        if found:
+            return found.group(1)
+    try:
+        from importlib.metadata import PackageNotFoundError, version as dist_version
+    except ImportError:  # pragma: no cover
+        return "unknown"
+    try:
+        return dist_version("bingham")
+    except PackageNotFoundError:  # pragma: no cover
+        return "unknown"
+
+
+#: The package's version: the crate's (``Cargo.toml``), set when the package is built; the
+#: bundled library's :func:`version` is the same.
+__version__: str = _package_version()
 
 
 # ---- helpers ---------------------------------------------------------------------------------
 
 
-def _in(a, name, shape=None):
+def _in(a: ArrayLike, name: str, shape: Optional[Tuple[int, ...]] = None) -> Array:
     """A C-contiguous float64 copy-or-view of `a`, shape-checked (the C side trusts lengths)."""
     arr = np.ascontiguousarray(a, dtype=np.float64)
     if shape is not None and arr.shape != shape:
@@ -220,28 +283,28 @@ def _in(a, name, shape=None):
     return arr
 
 
-def _ptr(arr):
+def _ptr(arr: Optional[Array]) -> Any:
     return None if arr is None else arr.ctypes.data_as(_D)
 
 
-def _check(status):
+def _check(status: int) -> None:
     if status != Status.OK:
         raise BinghamError(status, last_error_message())
 
 
-def _vec(z, name="z"):
+def _vec(z: ArrayLike, name: str = "z") -> Tuple[int, Array]:
     z = _in(z, name)
     if z.ndim != 1:
         raise ValueError(f"{name} must be a vector, got shape {z.shape}")
     return z.shape[0], z
 
 
-def _dist(m, z, names=("m", "z")):
+def _dist(m: ArrayLike, z: ArrayLike, names: Tuple[str, str] = ("m", "z")) -> Tuple[int, Array, Array]:
     d, z = _vec(z, names[1])
     return d, _in(m, names[0], (d, d)), z
 
 
-def _points(x, d):
+def _points(x: ArrayLike, d: int) -> Tuple[Array, bool]:
     x = _in(x, "x")
     single = x.ndim == 1
     x2 = x.reshape(1, -1) if single else x
@@ -253,17 +316,17 @@ def _points(x, d):
 # ---- the API ---------------------------------------------------------------------------------
 
 
-def version():
+def version() -> str:
     """The library version string, e.g. ``"0.1.0"``."""
-    return lib().bingham_version().decode()
+    return str(lib().bingham_version().decode())
 
 
-def status_str(status):
+def status_str(status: int) -> str:
     """The library's static description of a status code (any int)."""
-    return lib().bingham_status_str(int(status)).decode()
+    return str(lib().bingham_status_str(int(status)).decode())
 
 
-def last_error_message():
+def last_error_message() -> str:
     """This thread's last error message ('' if no call failed yet)."""
     n = _SIZE(0)
     _check_raw(lib().bingham_last_error_message(None, 0, ctypes.byref(n)))
@@ -272,12 +335,12 @@ def last_error_message():
     return buf.value.decode("utf-8", errors="replace")
 
 
-def _check_raw(status):
+def _check_raw(status: int) -> None:
     if status != Status.OK:  # only possible on misuse; do not recurse into last_error_message
         raise BinghamError(status, "bingham_last_error_message failed")
 
 
-def normalization_constant(z):
+def normalization_constant(z: ArrayLike) -> Tuple[float, Array]:
     """``(F, dF/dz)`` for concentrations ``z`` (any order/shift); F with the surface measure.
 
     Raises BinghamError (ERR_NUMERICAL) when F overflows a double: use the log version.
@@ -289,7 +352,7 @@ def normalization_constant(z):
     return float(f[0]), df
 
 
-def _log_norm(fn, z):
+def _log_norm(fn: Any, z: ArrayLike) -> Tuple[float, Array]:
     d, z = _vec(z)
     lf = np.empty(1)
     g = np.empty(d)
@@ -297,17 +360,17 @@ def _log_norm(fn, z):
     return float(lf[0]), g
 
 
-def log_normalization_constant(z):
+def log_normalization_constant(z: ArrayLike) -> Tuple[float, Array]:
     """``(log F, d log F/dz)``; the gradient is E[x_i²] in the principal frame (sums to 1)."""
     return _log_norm(lib().bingham_log_normalization_constant, z)
 
 
-def log_normalization_constant_saddlepoint(z):
+def log_normalization_constant_saddlepoint(z: ArrayLike) -> Tuple[float, Array]:
     """APPROXIMATE ``(log F, d log F/dz)`` by the saddlepoint method (errors ~1e-3..5e-2)."""
     return _log_norm(lib().bingham_log_normalization_constant_saddlepoint, z)
 
 
-def log_normalization_hessian(z):
+def log_normalization_hessian(z: ArrayLike) -> Tuple[float, Array, Array]:
     """``(log F, gradient, Hessian)`` of log F, in the order of the input ``z``."""
     d, z = _vec(z)
     lf = np.empty(1)
@@ -317,7 +380,7 @@ def log_normalization_hessian(z):
     return float(lf[0]), g, h
 
 
-def second_moment(m, z):
+def second_moment(m: ArrayLike, z: ArrayLike) -> Array:
     """``S = E[x xᵀ]`` (d×d, trace 1) of Bingham(m, z)."""
     d, m, z = _dist(m, z)
     s = np.empty((d, d))
@@ -325,7 +388,7 @@ def second_moment(m, z):
     return s
 
 
-def mle(s):
+def mle(s: ArrayLike) -> Tuple[Array, Array]:
     """Moment-matching / maximum-likelihood ``(m, z)`` for a second-moment matrix ``s``."""
     s = _in(s, "s")
     if s.ndim != 2 or s.shape[0] != s.shape[1]:
@@ -337,7 +400,7 @@ def mle(s):
     return m, z
 
 
-def mle_samples(x, w=None):
+def mle_samples(x: ArrayLike, w: Optional[ArrayLike] = None) -> Tuple[Array, Array]:
     """Maximum-likelihood ``(m, z)`` for unit vectors ``x`` (n×d), optional weights ``w`` (n)."""
     x = _in(x, "x")
     if x.ndim != 2:
@@ -351,7 +414,7 @@ def mle_samples(x, w=None):
     return m, z
 
 
-def _binary(fn, m1, z1, m2, z2):
+def _binary(fn: Any, m1: ArrayLike, z1: ArrayLike, m2: ArrayLike, z2: ArrayLike) -> Tuple[Array, Array]:
     d, m1, z1 = _dist(m1, z1, ("m1", "z1"))
     m2 = _in(m2, "m2", (d, d))
     z2 = _in(z2, "z2", (d,))
@@ -361,17 +424,17 @@ def _binary(fn, m1, z1, m2, z2):
     return m, z
 
 
-def multiply(m1, z1, m2, z2):
+def multiply(m1: ArrayLike, z1: ArrayLike, m2: ArrayLike, z2: ArrayLike) -> Tuple[Array, Array]:
     """Product of two Bingham densities (Bayes update), ``(m, z)``; exact."""
     return _binary(lib().bingham_multiply, m1, z1, m2, z2)
 
 
-def compose(m1, z1, m2, z2):
+def compose(m1: ArrayLike, z1: ArrayLike, m2: ArrayLike, z2: ArrayLike) -> Tuple[Array, Array]:
     """Moment-matched distribution of ``x ⊕ y`` (d = 2: complex, d = 4: quaternion product)."""
     return _binary(lib().bingham_compose, m1, z1, m2, z2)
 
 
-def _pointwise(fn, m, z, x):
+def _pointwise(fn: Any, m: ArrayLike, z: ArrayLike, x: ArrayLike) -> Union[float, Array]:
     d, m, z = _dist(m, z)
     x, single = _points(x, d)
     n = x.shape[0]
@@ -380,17 +443,17 @@ def _pointwise(fn, m, z, x):
     return float(p[0]) if single else p
 
 
-def pdf(m, z, x):
+def pdf(m: ArrayLike, z: ArrayLike, x: ArrayLike) -> Union[float, Array]:
     """Density at unit vector(s) ``x`` ((d,) → float, (n, d) → array), surface measure."""
     return _pointwise(lib().bingham_pdf, m, z, x)
 
 
-def log_pdf(m, z, x):
+def log_pdf(m: ArrayLike, z: ArrayLike, x: ArrayLike) -> Union[float, Array]:
     """Log density at unit vector(s) ``x``."""
     return _pointwise(lib().bingham_log_pdf, m, z, x)
 
 
-def entropy(m, z):
+def entropy(m: ArrayLike, z: ArrayLike) -> float:
     """Differential entropy in nats (w.r.t. the surface measure)."""
     d, m, z = _dist(m, z)
     h = np.empty(1)
@@ -398,7 +461,7 @@ def entropy(m, z):
     return float(h[0])
 
 
-def kl_divergence(m1, z1, m2, z2):
+def kl_divergence(m1: ArrayLike, z1: ArrayLike, m2: ArrayLike, z2: ArrayLike) -> float:
     """``KL(p1 ‖ p2)`` in nats."""
     d, m1, z1 = _dist(m1, z1, ("m1", "z1"))
     m2 = _in(m2, "m2", (d, d))
@@ -408,7 +471,7 @@ def kl_divergence(m1, z1, m2, z2):
     return float(kl[0])
 
 
-def sample(m, z, n, seed=0):
+def sample(m: ArrayLike, z: ArrayLike, n: int, seed: int = 0) -> Array:
     """``n`` samples (n×d unit vectors); deterministic in ``seed`` for a given library version."""
     d, m, z = _dist(m, z)
     n = int(n)
@@ -419,7 +482,7 @@ def sample(m, z, n, seed=0):
     return x
 
 
-def _rotate(fn, m, z, u):
+def _rotate(fn: Any, m: ArrayLike, z: ArrayLike, u: ArrayLike) -> Tuple[Array, Array]:
     d, m, z = _dist(m, z)
     u = _in(u, "u", (d,))
     mo = np.empty((d, d))
@@ -428,17 +491,17 @@ def _rotate(fn, m, z, u):
     return mo, zo
 
 
-def rotate_left(m, z, u):
+def rotate_left(m: ArrayLike, z: ArrayLike, u: ArrayLike) -> Tuple[Array, Array]:
     """Distribution of ``u ⊕ x`` for a fixed unit ``u`` (d = 2, 4), ``(m, z)``."""
     return _rotate(lib().bingham_rotate_left, m, z, u)
 
 
-def rotate_right(m, z, u):
+def rotate_right(m: ArrayLike, z: ArrayLike, u: ArrayLike) -> Tuple[Array, Array]:
     """Distribution of ``x ⊕ u`` for a fixed unit ``u`` (d = 2, 4), ``(m, z)``."""
     return _rotate(lib().bingham_rotate_right, m, z, u)
 
 
-def mode(m, z):
+def mode(m: ArrayLike, z: ArrayLike) -> Array:
     """The mode (a unit vector; ``-mode`` is equally a mode)."""
     d, m, z = _dist(m, z)
     out = np.empty(d)
@@ -457,96 +520,95 @@ class Filter:
     is garbage collected.
     """
 
-    def __init__(self, m0, z0):
+    def __init__(self, m0: ArrayLike, z0: ArrayLike) -> None:
         d, m0, z0 = _dist(m0, z0, ("m0", "z0"))
         handle = ctypes.c_void_p()
         _check(lib().bingham_filter_new(d, _ptr(m0), _ptr(z0), ctypes.byref(handle)))
-        self._handle = handle
+        self._handle: Optional[ctypes.c_void_p] = handle
         self.d = d
 
     @classmethod
-    def _adopt(cls, handle, d):
+    def _adopt(cls, handle: ctypes.c_void_p, d: int) -> "Filter":
         f = cls.__new__(cls)
         f._handle = handle
         f.d = d
         return f
 
-    def _h(self):
+    def _h(self) -> ctypes.c_void_p:
         if self._handle is None:
             raise ValueError("the filter has been closed")
         return self._handle
 
-    def close(self):
+    def close(self) -> None:
         """Releases the handle (idempotent)."""
         if getattr(self, "_handle", None) is not None:
             lib().bingham_filter_free(self._handle)
             self._handle = None
 
-    def __del__(self):
+    def __del__(self) -> None:
         try:
             self.close()
         except Exception:  # interpreter shutdown: the library may be gone already
             pass
 
-    def __enter__(self):
+    def __enter__(self) -> "Filter":
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> None:
         self.close()
-        return False
 
-    def clone(self):
+    def clone(self) -> "Filter":
         """An independent copy (state and cached noise parameters)."""
         handle = ctypes.c_void_p()
         _check(lib().bingham_filter_clone(self._h(), ctypes.byref(handle)))
         return Filter._adopt(handle, self.d)
 
-    def dim(self):
+    def dim(self) -> int:
         """The dimension as reported by the library (2 or 4)."""
         d = _SIZE(0)
         _check(lib().bingham_filter_dim(self._h(), ctypes.byref(d)))
         return d.value
 
-    def state(self):
+    def state(self) -> Tuple[Array, Array]:
         """The estimate ``(m, z)``: z ascending with z[-1] = 0, the last column of m the mode."""
         m = np.empty((self.d, self.d))
         z = np.empty(self.d)
         _check(lib().bingham_filter_get_state(self._h(), _ptr(m), _ptr(z)))
         return m, z
 
-    def set_state(self, m, z):
+    def set_state(self, m: ArrayLike, z: ArrayLike) -> None:
         """Replaces the estimate by Bingham(m, z)."""
         m = _in(m, "m", (self.d, self.d))
         z = _in(z, "z", (self.d,))
         _check(lib().bingham_filter_set_state(self._h(), _ptr(m), _ptr(z)))
 
-    def mode(self):
+    def mode(self) -> Array:
         """The point estimate (a unit vector; its negative is the same axis / rotation)."""
         out = np.empty(self.d)
         _check(lib().bingham_filter_mode(self._h(), _ptr(out)))
         return out
 
-    def _noise(self, m, z, names):
+    def _noise(self, m: ArrayLike, z: ArrayLike, names: Tuple[str, str]) -> Tuple[Array, Array]:
         return _in(m, names[0], (self.d, self.d)), _in(z, names[1], (self.d,))
 
-    def predict(self, m_w, z_w):
+    def predict(self, m_w: ArrayLike, z_w: ArrayLike) -> None:
         """Prediction with process noise Bingham(m_w, z_w)."""
         m_w, z_w = self._noise(m_w, z_w, ("m_w", "z_w"))
         _check(lib().bingham_filter_predict(self._h(), _ptr(m_w), _ptr(z_w)))
 
-    def predict_rotation(self, u, m_w, z_w):
+    def predict_rotation(self, u: ArrayLike, m_w: ArrayLike, z_w: ArrayLike) -> None:
         """Prediction of ``x ⊕ u ⊕ w`` for a known unit ``u`` (e.g. a gyroscope increment)."""
         u = _in(u, "u", (self.d,))
         m_w, z_w = self._noise(m_w, z_w, ("m_w", "z_w"))
         _check(lib().bingham_filter_predict_rotation(self._h(), _ptr(u), _ptr(m_w), _ptr(z_w)))
 
-    def update(self, measurement, m_v, z_v):
+    def update(self, measurement: ArrayLike, m_v: ArrayLike, z_v: ArrayLike) -> None:
         """Measurement update with ``measurement = x ⊕ v``, v ~ Bingham(m_v, z_v)."""
         meas = _in(measurement, "measurement", (self.d,))
         m_v, z_v = self._noise(m_v, z_v, ("m_v", "z_v"))
         _check(lib().bingham_filter_update(self._h(), _ptr(meas), _ptr(m_v), _ptr(z_v)))
 
-    def log_likelihood(self, measurement, m_v, z_v):
+    def log_likelihood(self, measurement: ArrayLike, m_v: ArrayLike, z_v: ArrayLike) -> float:
         """Log predictive density of a measurement (the filter is not changed)."""
         meas = _in(measurement, "measurement", (self.d,))
         m_v, z_v = self._noise(m_v, z_v, ("m_v", "z_v"))
@@ -556,14 +618,14 @@ class Filter:
         )
         return float(out[0])
 
-    def update_vector(self, body, reference, kappa):
+    def update_vector(self, body: ArrayLike, reference: ArrayLike, kappa: float) -> None:
         """Update (d = 4) with a measured direction ``body`` (sensor frame, unit) of the known
         ``reference`` (world frame, unit), von Mises–Fisher noise of concentration ``kappa``."""
         b = _in(body, "body", (3,))
         r = _in(reference, "reference", (3,))
         _check(lib().bingham_filter_update_vector(self._h(), _ptr(b), _ptr(r), float(kappa)))
 
-    def log_likelihood_vector(self, body, reference, kappa):
+    def log_likelihood_vector(self, body: ArrayLike, reference: ArrayLike, kappa: float) -> float:
         """Log predictive density of a measured direction (d = 4; the filter is not changed)."""
         b = _in(body, "body", (3,))
         r = _in(reference, "reference", (3,))
@@ -575,7 +637,7 @@ class Filter:
         )
         return float(out[0])
 
-    def angular_spread(self):
+    def angular_spread(self) -> Array:
         """The state's angular spread in radians (see :func:`angular_spread`), length d."""
         out = np.empty(self.d)
         _check(lib().bingham_filter_angular_spread(self._h(), _ptr(out)))
@@ -585,7 +647,7 @@ class Filter:
 # ---- vector observations and the AHRS ---------------------------------------------------------
 
 
-def vector_observation(body, reference, kappa):
+def vector_observation(body: ArrayLike, reference: ArrayLike, kappa: float) -> Tuple[Array, Array]:
     """The likelihood ``exp(kappa rᵀ R(q) b)`` of a measured direction ``body`` (sensor frame)
     of the known ``reference`` (world frame) as a Bingham distribution of the quaternion q
     (scalar first, sensor → world): ``(m, z)``, z = (−2κ, −2κ, 0, 0)."""
@@ -597,7 +659,7 @@ def vector_observation(body, reference, kappa):
     return m, z
 
 
-def noise_from_angle_std(d, sigma):
+def noise_from_angle_std(d: int, sigma: float) -> Tuple[Array, Array]:
     """Isotropic rotation noise with angular standard deviation ``sigma`` (radians) as
     ``(m, z)`` with the mode at the identity (d = 4: Gaussian rotation vector; d = 2: Gaussian
     angle), the exact moment-matched Bingham."""
@@ -607,7 +669,7 @@ def noise_from_angle_std(d, sigma):
     return m, z
 
 
-def angular_spread(m, z):
+def angular_spread(m: ArrayLike, z: ArrayLike) -> Array:
     """Angular spread in radians (d = 2, 4): entries 0..d-2 along the principal directions
     (columns of m), entry d-1 the total (d = 4: RMS of 2 sin(θ/2), θ the rotation angle from the
     mode, ≈ the RMS angle)."""
@@ -644,16 +706,18 @@ class AhrsParams(ctypes.Structure):
     ]
 
     @classmethod
-    def default(cls, sample_time):
+    def default(cls, sample_time: float) -> "AhrsParams":
+        """The library's tuned defaults for the sample time ``sample_time`` (seconds)."""
         p = cls()
         _check(lib().bingham_ahrs_params_default(float(sample_time), ctypes.byref(p)))
         return p
 
-    def as_dict(self):
-        return {name: getattr(self, name) for name, _ in self._fields_}
+    def as_dict(self) -> Dict[str, float]:
+        """The parameters as a ``{name: value}`` dictionary."""
+        return {name: getattr(self, name) for name, *_ in self._fields_}
 
 
-def _rows3(a, name, n=None):
+def _rows3(a: ArrayLike, name: str, n: Optional[int] = None) -> Array:
     arr = _in(a, name)
     if arr.ndim != 2 or arr.shape[1] != 3 or (n is not None and arr.shape[0] != n):
         want = f"({n if n is not None else 'n'}, 3)"
@@ -670,7 +734,7 @@ class Ahrs:
     or keyword overrides (``Ahrs(0.01, acc_noise=0.8)``) to change them.
     """
 
-    def __init__(self, sample_time, params=None, **overrides):
+    def __init__(self, sample_time: float, params: Optional[AhrsParams] = None, **overrides: float) -> None:
         p = AhrsParams.default(sample_time) if params is None else params
         for k, v in overrides.items():
             if k not in p.as_dict():
@@ -678,41 +742,42 @@ class Ahrs:
             setattr(p, k, float(v))
         handle = ctypes.c_void_p()
         _check(lib().bingham_ahrs_new(ctypes.byref(p), ctypes.byref(handle)))
-        self._handle = handle
+        self._handle: Optional[ctypes.c_void_p] = handle
         self.params = p
 
-    def close(self):
+    def close(self) -> None:
         """Releases the handle (idempotent)."""
         if getattr(self, "_handle", None) is not None:
             lib().bingham_ahrs_free(self._handle)
             self._handle = None
 
-    def __del__(self):
+    def __del__(self) -> None:
         try:
             self.close()
         except Exception:
             pass
 
-    def __enter__(self):
+    def __enter__(self) -> "Ahrs":
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> None:
         self.close()
-        return False
 
-    def _h(self):
+    def _h(self) -> ctypes.c_void_p:
         if self._handle is None:
             raise ValueError("the AHRS has been closed")
         return self._handle
 
-    def update(self, gyr, acc, mag=None):
+    def update(self, gyr: ArrayLike, acc: ArrayLike, mag: Optional[ArrayLike] = None) -> None:
         """One sample (3-vectors; ``mag`` may be None)."""
         g = _in(gyr, "gyr", (3,))
         a = _in(acc, "acc", (3,))
         m = None if mag is None else _in(mag, "mag", (3,))
         _check(lib().bingham_ahrs_update(self._h(), _ptr(g), _ptr(a), _ptr(m)))
 
-    def update_batch(self, gyr, acc, mag=None, spread=False):
+    def update_batch(
+        self, gyr: ArrayLike, acc: ArrayLike, mag: Optional[ArrayLike] = None, spread: bool = False
+    ) -> Union[Array, Tuple[Array, Array]]:
         """n samples (n×3 arrays; ``mag`` n×3 or None). Returns the n×4 quaternions after each
         sample, or ``(quat, spread)`` with the total angular spread (radians, length n) when
         ``spread`` is true. A refused sample raises :class:`BinghamError` (its message names the
@@ -728,34 +793,36 @@ class Ahrs:
                 self._h(), n, _ptr(g), _ptr(a), _ptr(m), _ptr(q), _ptr(s)
             )
         )
-        return (q, s) if spread else q
+        if s is not None:
+            return q, s
+        return q
 
-    def quaternion(self):
+    def quaternion(self) -> Array:
         """The estimate (w, x, y, z), sensor → world ENU, w ≥ 0."""
         out = np.empty(4)
         _check(lib().bingham_ahrs_quaternion(self._h(), _ptr(out)))
         return out
 
-    def state(self):
+    def state(self) -> Tuple[Array, Array]:
         """The Bingham state ``(m, z)`` of the orientation."""
         m = np.empty((4, 4))
         z = np.empty(4)
         _check(lib().bingham_ahrs_state(self._h(), _ptr(m), _ptr(z)))
         return m, z
 
-    def set_state(self, m, z):
+    def set_state(self, m: ArrayLike, z: ArrayLike) -> None:
         """Replaces the orientation estimate by Bingham(m, z) (a known start or a reset)."""
         m = _in(m, "m", (4, 4))
         z = _in(z, "z", (4,))
         _check(lib().bingham_ahrs_set_state(self._h(), _ptr(m), _ptr(z)))
 
-    def angular_spread(self):
+    def angular_spread(self) -> Array:
         """Angular spread (radians): 3 principal axes, then the total."""
         out = np.empty(4)
         _check(lib().bingham_ahrs_angular_spread(self._h(), _ptr(out)))
         return out
 
-    def gyro_bias(self):
+    def gyro_bias(self) -> Array:
         """The gyroscope bias estimate (rad/s, sensor frame)."""
         out = np.empty(3)
         _check(lib().bingham_ahrs_gyro_bias(self._h(), _ptr(out)))

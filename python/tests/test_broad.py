@@ -10,10 +10,13 @@ CC BY 4.0.
 
 import glob
 import os
+import sys
 
 import pytest
 
-import broad
+# broad.py is an example program (examples/python/), not part of the package
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "examples", "python"))
+import broad  # noqa: E402
 
 # The README's figure for the default parameters (mean total RMSE over the nine trials, degrees).
 DOCUMENTED_MEAN_TOTAL = 2.21

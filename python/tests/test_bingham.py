@@ -1,4 +1,4 @@
-"""Tests of the ctypes binding (run by `make test`; `python3 -m pytest examples/python`).
+"""Tests of the ctypes binding (run by `make python-test` against the pip-installed package).
 
 References are computed here with NumPy, independently of the library: quadrature over the
 circle / the 2-sphere, the d = 2 closed form with numpy.i0, eigendecompositions with eigh, and
@@ -75,7 +75,7 @@ class Binding(unittest.TestCase):
             header = f.read()
         declared = set(re.findall(r"^[a-z][^\n]*?\b(bingham_\w+)\(", header, re.M))
         self.assertIn("bingham_mle", declared)
-        self.assertEqual(declared, set(bh._SIGNATURES), "bind new functions in bingham.py")
+        self.assertEqual(declared, set(bh._SIGNATURES), "bind new functions in python/bingham/__init__.py")
         # the number of parameters agrees with the header
         for name, params in re.findall(r"^[a-z][^\n]*?\b(bingham_\w+)\(([^)]*)\)", header, re.M):
             n = 0 if params.strip() in ("", "void") else params.count(",") + 1

@@ -1,0 +1,247 @@
+// standards: c++17 c++20
+//
+// The Eigen side of the C++ wrapper (include/bingham_eigen.hpp), against the explicit C calls
+// and against computations written here with Eigen:
+//
+// - Eigen::Quaterniond in: Filter::update / predict_rotation / log_likelihood and pdf with a
+//   random Eigen::Quaterniond give bit for bit what the C calls give with (q.w(), q.x(), q.y(),
+//   q.z()) -- and something else than with Eigen's coeffs() order (x, y, z, w), so the test
+//   would notice a wrapper that used coeffs();
+// - Eigen::Quaterniond out: Filter::mode_quaternion() and Ahrs::quaternion() converted to
+//   Eigen::Quaterniond have w() = the C mode's entry 0, x() = entry 1, ...; a static sensor at
+//   a known orientation q_true (accelerometer R(q_true)^T g, magnetometer R(q_true)^T m, with
+//   R from Eigen) drives the AHRS to q_true (Eigen's angularDistance < 0.5 degrees);
+// - M in either storage order: a column-major Matrix4d and a row-major
+//   Matrix<double, 4, 4, RowMajor> with the same entries give the same Distribution (the
+//   row-major std::vector equal to the entries M(i, j)) and the same results; the transpose gives
+//   a different one; Distribution::matrix() gives M back; second_moment_matrix equals
+//   M diag(omega) M^T computed with Eigen from the gradient of log F;
+// - pdf at Eigen points (a vector, an n x 4 matrix in either storage order) equals the C call
+//   and exp(x^T M Z M^T x) / F computed with Eigen;
+// - vector_observation with Eigen 3-vectors: the exponent q^T M Z M^T q equals
+//   kappa (r^T R(q) b - 1) for random q, R(q) = Eigen::Quaterniond(q).toRotationMatrix();
+// - mle of an Eigen matrix in either storage order equals mle of the row-major vector.
+#include <Eigen/Dense>
+
+#include "bingham_eigen.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "check.h"
+
+static_assert(BINGHAM_HPP_EIGEN, "Eigen support must be detected");
+static_assert(std::is_convertible_v<Eigen::Quaterniond, bingham::Quaternion> &&
+                  std::is_convertible_v<bingham::Quaternion, Eigen::Quaterniond>,
+              "Quaternion <-> Eigen::Quaterniond");
+
+using Eigen::Matrix4d;
+using Eigen::Quaterniond;
+using Eigen::Vector3d;
+using Eigen::Vector4d;
+using RowMatrix4d = Eigen::Matrix<double, 4, 4, Eigen::RowMajor>;
+
+static std::mt19937_64 rng(20251124);
+
+static Quaterniond random_quaternion() {
+    std::normal_distribution<double> g;
+    Quaterniond q(g(rng), g(rng), g(rng), g(rng));
+    q.normalize();
+    if (q.w() < 0) q.coeffs() *= -1;
+    return q;
+}
+
+static Matrix4d random_orthogonal() {
+    std::normal_distribution<double> g;
+    Matrix4d a;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) a(i, j) = g(rng);
+    Eigen::HouseholderQR<Matrix4d> qr(a);
+    return qr.householderQ() * Matrix4d::Identity();
+}
+
+static bool same(const std::vector<double> &a, const std::vector<double> &b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+static bool same(const bingham::Distribution &a, const bingham::Distribution &b) {
+    return a.d == b.d && same(a.M, b.M) && same(a.z, b.z);
+}
+
+static void test_quaternions() {
+    const bingham::Distribution w = bingham::noise_from_angle_std_deg(4, 2.0);
+    const bingham::Distribution v = bingham::noise_from_angle_std_deg(4, 4.0);
+    const bingham::Distribution init(Matrix4d::Identity(), Vector4d(-1, -1, -1, 0));
+    bingham::Filter f(init);
+    bingham::Filter wrong = f.clone();  // what coeffs() order would give
+    bingham_filter *c = nullptr;
+    CHECK_OK(bingham_filter_new(4, init.M.data(), init.z.data(), &c));
+    for (int k = 0; k < 20; ++k) {
+        const Quaterniond u = random_quaternion(), meas = random_quaternion();
+        f.predict_rotation(u, w);
+        f.update(meas, v);
+        const double uc[4] = {u.w(), u.x(), u.y(), u.z()}, mc[4] = {meas.w(), meas.x(), meas.y(), meas.z()};
+        CHECK_OK(bingham_filter_predict_rotation(c, uc, w.M.data(), w.z.data()));
+        CHECK_OK(bingham_filter_update(c, mc, v.M.data(), v.z.data()));
+        CHECK_OK(bingham_filter_predict_rotation(wrong.get(), u.coeffs().data(), w.M.data(), w.z.data()));
+        CHECK_OK(bingham_filter_update(wrong.get(), meas.coeffs().data(), v.M.data(), v.z.data()));
+        double ll_c;
+        CHECK_OK(bingham_filter_log_likelihood(c, mc, v.M.data(), v.z.data(), &ll_c));
+        CHECK(f.log_likelihood(meas, v) == ll_c);
+    }
+    double m[16], z[4], mode[4];
+    CHECK_OK(bingham_filter_get_state(c, m, z));
+    CHECK_OK(bingham_filter_mode(c, mode));
+    const bingham::Distribution s = f.state();
+    CHECK(std::memcmp(s.M.data(), m, sizeof m) == 0 && std::memcmp(s.z.data(), z, sizeof z) == 0);
+    CHECK(!same(s, wrong.state()));  // the order matters: a coeffs() wrapper would fail above
+    const Quaterniond q = f.mode_quaternion();
+    CHECK(q.w() == mode[0] && q.x() == mode[1] && q.y() == mode[2] && q.z() == mode[3]);
+    const bingham::Quaternion bq = q;
+    CHECK(bq.w == q.w() && bq.x == q.x() && bq.y == q.y() && bq.z == q.z());
+    // Eigen::Map<Quaterniond> over Eigen's own (x, y, z, w) storage converts by name too
+    const double xyzw[4] = {0.5, -0.5, 0.5, 0.5};
+    const bingham::Quaternion mq = Eigen::Map<const Quaterniond>(xyzw);
+    CHECK(mq.w == 0.5 && mq.x == 0.5 && mq.y == -0.5 && mq.z == 0.5);
+    // mode of a distribution, pdf at quaternions, rotate
+    const Quaterniond dm = bingham::mode_quaternion(s);
+    CHECK(dm.w() == mode[0] && dm.z() == mode[3]);
+    const Quaterniond p = random_quaternion();
+    double pdf_c;
+    const double pc[4] = {p.w(), p.x(), p.y(), p.z()};
+    CHECK_OK(bingham_pdf(4, m, z, 1, pc, &pdf_c));
+    CHECK(bingham::pdf(s, p) == pdf_c);
+    double rm[16], rz[4];
+    CHECK_OK(bingham_rotate_left(4, m, z, pc, rm, rz));
+    const bingham::Distribution rl = bingham::rotate_left(s, p);
+    CHECK(std::memcmp(rl.M.data(), rm, sizeof rm) == 0);
+    bingham_filter_free(c);
+}
+
+static void test_storage_order() {
+    const Matrix4d mc = random_orthogonal();  // column-major
+    const RowMatrix4d mr = mc;                 // the same entries, row-major storage
+    const Vector4d z(-40, -9, -2, 0);
+    const bingham::Distribution a(mc, z), b(mr, z);
+    CHECK(same(a, b));
+    bool entries = true;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) entries = entries && a.M[static_cast<std::size_t>(4 * i + j)] == mc(i, j);
+    CHECK(entries);
+    CHECK(!same(a, bingham::Distribution(mc.transpose(), z)));
+    CHECK(a.matrix() == mc && a.concentrations() == z);
+    // second moment: library vs M diag(omega) M^T with Eigen
+    const auto lg = bingham::log_normalization_constant_gradient({z(0), z(1), z(2), z(3)});
+    const Vector4d omega(lg.gradient[0], lg.gradient[1], lg.gradient[2], lg.gradient[3]);
+    const Matrix4d s_ref = mc * omega.asDiagonal() * mc.transpose();
+    const Eigen::MatrixXd s_lib = bingham::second_moment_matrix(a);
+    CHECK((s_lib - s_ref).cwiseAbs().maxCoeff() < 1e-14);
+    CHECK(bingham::second_moment_matrix(b) == s_lib);
+    // MLE of an Eigen matrix in either order
+    const RowMatrix4d s_row = s_lib;
+    const bingham::Distribution fit = bingham::mle(s_lib), fit_r = bingham::mle(s_row);
+    std::vector<double> sv(16);
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) sv[static_cast<std::size_t>(4 * i + j)] = s_lib(i, j);
+    CHECK(same(fit, fit_r) && same(fit, bingham::mle(4, sv)));
+    CHECK_CLOSE(fit.z[0], -40.0, 1e-7);
+    // pdf: Eigen points against the C call and an Eigen computation
+    Eigen::Matrix<double, 6, 4> pts;  // column-major n x d
+    for (int k = 0; k < 6; ++k) pts.row(k) = random_quaternion().coeffs().transpose();  // any unit vectors
+    const Eigen::Matrix<double, 6, 4, Eigen::RowMajor> pts_r = pts;
+    std::vector<double> flat(24), p_c(6);
+    for (int k = 0; k < 6; ++k)
+        for (int j = 0; j < 4; ++j) flat[static_cast<std::size_t>(4 * k + j)] = pts(k, j);
+    CHECK_OK(bingham_pdf(4, a.M.data(), a.z.data(), 6, flat.data(), p_c.data()));
+    const Eigen::VectorXd pa = bingham::pdf_points(a, pts), pb = bingham::pdf_points(a, pts_r);
+    const double log_f = bingham::log_normalization_constant({z(0), z(1), z(2), z(3)});
+    for (int k = 0; k < 6; ++k) {
+        CHECK(pa(k) == p_c[static_cast<std::size_t>(k)] && pb(k) == pa(k));
+        const Vector4d x = pts.row(k).transpose();
+        CHECK_CLOSE(pa(k), std::exp(x.dot(mc * z.asDiagonal() * mc.transpose() * x) - log_f), 1e-12);
+        CHECK(bingham::pdf(a, x) == pa(k));
+        CHECK_CLOSE(bingham::log_pdf(a, x), std::log(pa(k)), 1e-12);
+    }
+    // a 2 x 2 matrix too
+    const Eigen::Matrix2d m2 = Eigen::Rotation2Dd(0.3).toRotationMatrix();
+    const bingham::Distribution d2(m2, Eigen::Vector2d(-5, 0));
+    CHECK(d2.d == 2 && d2.M[1] == m2(0, 1) && d2.M[2] == m2(1, 0));
+    // wrong sizes throw
+    try {
+        const bingham::Distribution bad(Eigen::Matrix3d::Identity(), z);
+        CHECK(false);
+    } catch (const bingham::Error &e) {
+        CHECK(e.status() == BINGHAM_ERR_INVALID_DIMENSION);
+    }
+    // samples as an Eigen matrix: the same as the vector version
+    const Eigen::MatrixXd smp = bingham::sample_matrix(a, 3, 7);
+    const std::vector<double> sv2 = bingham::sample(a, 3, 7);
+    CHECK(smp.rows() == 3 && smp.cols() == 4 && smp(1, 2) == sv2[6] && smp(2, 3) == sv2[11]);
+}
+
+static void test_vectors() {
+    // vector_observation with Eigen vectors: exponent q^T M Z M^T q = kappa (r^T R(q) b - 1)
+    std::normal_distribution<double> g;
+    const Vector3d body = Vector3d(g(rng), g(rng), g(rng)).normalized();
+    const Vector3d ref = Vector3d(g(rng), g(rng), g(rng)).normalized();
+    const double kappa = 25.0;
+    const bingham::Distribution obs = bingham::vector_observation(body, ref, kappa);
+    CHECK(same(obs, bingham::vector_observation(std::array<double, 3>{body(0), body(1), body(2)},
+                                                std::array<double, 3>{ref(0), ref(1), ref(2)}, kappa)));
+    const Matrix4d m = obs.matrix();
+    const Vector4d z = obs.concentrations();
+    double worst = 0;
+    for (int k = 0; k < 50; ++k) {
+        const Quaterniond q = random_quaternion();
+        const Vector4d qv(q.w(), q.x(), q.y(), q.z());
+        const double exponent = qv.dot(m * z.asDiagonal() * m.transpose() * qv);
+        const double direct = kappa * (ref.dot(q.toRotationMatrix() * body) - 1.0);
+        worst = std::max(worst, std::abs(exponent - direct));
+    }
+    CHECK(worst < 1e-12);
+    // Filter::update_vector with Eigen vectors equals the array version
+    bingham::Filter f(bingham::noise_from_angle_std_deg(4, 30.0));
+    bingham::Filter h = f.clone();
+    f.update_vector(body, ref, kappa);
+    h.update_vector({body(0), body(1), body(2)}, {ref(0), ref(1), ref(2)}, kappa);
+    CHECK(same(f.state(), h.state()));
+    CHECK(f.log_likelihood_vector(body, ref, kappa) ==
+          h.log_likelihood_vector({body(0), body(1), body(2)}, {ref(0), ref(1), ref(2)}, kappa));
+}
+
+static void test_ahrs() {
+    // a static sensor at q_true: the AHRS converges to it (sensor -> world, ENU)
+    const Quaterniond q_true = Quaterniond(Eigen::AngleAxisd(0.7, Vector3d(0.2, -0.5, 1.0).normalized()));
+    const Eigen::Matrix3d r = q_true.toRotationMatrix();
+    const Vector3d g_world(0, 0, 9.81), m_world(0, 20.0, -40.0);
+    const Vector3d acc = r.transpose() * g_world, mag = r.transpose() * m_world;
+    bingham::Ahrs a(0.01), b(0.01);
+    for (int k = 0; k < 300; ++k) {
+        a.update(Vector3d::Zero(), acc, mag);
+        b.update({0, 0, 0}, {acc(0), acc(1), acc(2)}, {mag(0), mag(1), mag(2)});
+    }
+    const Quaterniond q = a.quaternion();
+    double qc[4];
+    CHECK_OK(bingham_ahrs_quaternion(a.get(), qc));
+    CHECK(q.w() == qc[0] && q.x() == qc[1] && q.y() == qc[2] && q.z() == qc[3]);
+    CHECK(same(a.state(), b.state()));
+    const double err_deg = q.angularDistance(q_true) * 180.0 / 3.14159265358979323846;
+    if (err_deg >= 0.5) std::fprintf(stderr, "    AHRS error %.3f deg\n", err_deg);
+    CHECK(err_deg < 0.5);
+    CHECK((a.gyro_bias_vector() - Vector3d(b.gyro_bias()[0], b.gyro_bias()[1], b.gyro_bias()[2])).norm() == 0);
+    CHECK(a.uncertainty() > 0 && a.uncertainty() < 0.1);
+}
+
+int main() {
+    try {
+        test_quaternions();
+        test_storage_order();
+        test_vectors();
+        test_ahrs();
+    } catch (const std::exception &e) {
+        std::fprintf(stderr, "unexpected exception: %s\n", e.what());
+        return 1;
+    }
+    return check_summary(__cplusplus >= 202002L ? "wrapper_eigen (C++20)" : "wrapper_eigen (C++17)");
+}

@@ -1,0 +1,427 @@
+// standards: c++17 c++20
+//
+// The C++ wrapper (include/bingham.hpp) without Eigen, against the C API it wraps:
+//
+// - every wrapped free function gives bit for bit what the C call gives for the same input;
+// - errors throw bingham::Error whose status() is the C status and whose what() is the message
+//   bingham_last_error_message() reports for the same C call; sizes the C API cannot check
+//   (Distribution, vectors) throw BINGHAM_ERR_INVALID_DIMENSION before the library is called;
+//   a failing call leaves its target (a Filter, an Ahrs, the variable assigned to) unchanged;
+// - Filter and Ahrs: the same steps as a C handle give bit-identical states; a moved-from handle
+//   is empty (operator bool false, methods throw BINGHAM_ERR_NULL_ARGUMENT), safe to destroy and
+//   to assign to; move assignment releases the old handle (LeakSanitizer, `make sanitize`,
+//   would report a leak, ASan a double free); clone() is independent of its original.
+//
+// Built as C++17 and as C++20 with -Wall -Wextra -Werror -pedantic (tests/c_tests.rs) and under
+// ASan + UBSan + LSan (scripts/sanitize.sh).
+#include "bingham.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "check.h"
+
+static_assert(!BINGHAM_HPP_EIGEN, "this test is the configuration without Eigen");
+static_assert(!std::is_copy_constructible_v<bingham::Filter> && std::is_nothrow_move_constructible_v<bingham::Filter> &&
+                  std::is_nothrow_move_assignable_v<bingham::Filter>,
+              "Filter is move-only");
+static_assert(!std::is_copy_constructible_v<bingham::Ahrs> && std::is_nothrow_move_constructible_v<bingham::Ahrs>,
+              "Ahrs is move-only");
+
+static bool same(const std::vector<double> &a, const std::vector<double> &b) {
+    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
+}
+static bool same(const bingham::Distribution &a, const bingham::Distribution &b) {
+    return a.d == b.d && same(a.M, b.M) && same(a.z, b.z);
+}
+
+// Runs `f`, expecting a bingham::Error with `status`; if `c_call` is given, it is the same call
+// through the C API, whose status and message must equal the exception's.
+template <class F, class C>
+static void expect_error(F f, bingham_status status, C c_call, const char *what) {
+    try {
+        f();
+        check_report(0, __FILE__, __LINE__, what);
+        std::fprintf(stderr, "    no exception\n");
+    } catch (const bingham::Error &e) {
+        const std::string msg = e.what();
+        check_report(e.status() == status, __FILE__, __LINE__, what);
+        check_report(!msg.empty() && e.message() == msg, __FILE__, __LINE__, what);
+        if constexpr (!std::is_same_v<C, std::nullptr_t>) {
+            const bingham_status st = c_call();
+            check_report(st == status, __FILE__, __LINE__, what);
+            if (bingham::last_error_message() != msg)
+                std::fprintf(stderr, "    C: \"%s\"\n    C++: \"%s\"\n", bingham::last_error_message().c_str(),
+                             msg.c_str());
+            check_report(bingham::last_error_message() == msg, __FILE__, __LINE__, what);
+        }
+    }
+}
+template <class F>
+static void expect_error(F f, bingham_status status, const char *what) {
+    expect_error(f, status, nullptr, what);
+}
+
+static const double PI = 3.14159265358979323846;
+
+static void test_free_functions() {
+    using bingham::Distribution;
+    const double c = std::cos(0.4), s = std::sin(0.4);
+    // a d = 4 distribution: a rotation of the identity in the (0, 3) and (1, 2) planes
+    const Distribution a({c, 0, 0, -s, 0, c, -s, 0, 0, s, c, 0, s, 0, 0, c}, {-30, -12, -3, 0});
+    const Distribution b({0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 0}, {-500, -200, -50, 0});
+    const std::size_t d = 4;
+
+    // normalization constant and derivatives
+    {
+        const std::vector<double> z = {-5, -2, -1, 0};
+        double f, lf, df[4], dlf[4], h[16];
+        CHECK_OK(bingham_normalization_constant(d, z.data(), &f, df));
+        CHECK_OK(bingham_log_normalization_hessian(d, z.data(), &lf, dlf, h));
+        CHECK(bingham::normalization_constant(z) == f);
+        const auto g = bingham::normalization_constant_gradient(z);
+        CHECK(g.value == f && same(g.gradient, std::vector<double>(df, df + 4)));
+        CHECK(bingham::log_normalization_constant(z) == lf);
+        const auto lg = bingham::log_normalization_constant_gradient(z);
+        CHECK(lg.value == lf && same(lg.gradient, std::vector<double>(dlf, dlf + 4)));
+        const auto hh = bingham::log_normalization_hessian(z);
+        CHECK(same(hh.hessian, std::vector<double>(h, h + 16)) && same(hh.gradient, lg.gradient));
+        CHECK_CLOSE(bingham::normalization_constant({0, 0, 0, 0}), 2 * PI * PI, 1e-14);
+        double sp, dsp[4];
+        CHECK_OK(bingham_log_normalization_constant_saddlepoint(d, z.data(), &sp, dsp));
+        CHECK(bingham::log_normalization_constant_saddlepoint(z).value == sp);
+        const std::vector<double> big = {800, 0, 0};
+        expect_error([&] { (void)bingham::normalization_constant(big); }, BINGHAM_ERR_NUMERICAL,
+                     [&] {
+                         double v;
+                         return bingham_normalization_constant(3, big.data(), &v, nullptr);
+                     },
+                     "normalization_constant overflow");
+        expect_error([] { (void)bingham::log_normalization_constant({0.0}); }, BINGHAM_ERR_INVALID_DIMENSION,
+                     "d = 1");
+    }
+    // moments, MLE
+    std::vector<double> s_c(16), m_c(16), z_c(4);
+    CHECK_OK(bingham_second_moment(d, a.M.data(), a.z.data(), s_c.data()));
+    CHECK(same(bingham::second_moment(a), s_c));
+    CHECK_OK(bingham_mle(d, s_c.data(), m_c.data(), z_c.data()));
+    const Distribution fit = bingham::mle(4, s_c);
+    CHECK(same(fit.M, m_c) && same(fit.z, z_c) && fit.d == 4);
+    CHECK_CLOSE(fit.z[0], -30.0, 1e-8);
+    // multiply, compose, rotate
+    {
+        std::vector<double> m(16), z(4);
+        CHECK_OK(bingham_multiply(d, a.M.data(), a.z.data(), b.M.data(), b.z.data(), m.data(), z.data()));
+        CHECK(same(bingham::multiply(a, b), Distribution(m, z)));
+        CHECK_OK(bingham_compose(d, a.M.data(), a.z.data(), b.M.data(), b.z.data(), m.data(), z.data()));
+        CHECK(same(bingham::compose(a, b), Distribution(m, z)));
+        const std::vector<double> u = {0.5, 0.5, -0.5, 0.5};
+        CHECK_OK(bingham_rotate_left(d, a.M.data(), a.z.data(), u.data(), m.data(), z.data()));
+        CHECK(same(bingham::rotate_left(a, u), Distribution(m, z)));
+        CHECK(same(bingham::rotate_left(a, bingham::Quaternion(0.5, 0.5, -0.5, 0.5)), Distribution(m, z)));
+        CHECK_OK(bingham_rotate_right(d, a.M.data(), a.z.data(), u.data(), m.data(), z.data()));
+        CHECK(same(bingham::rotate_right(a, u), Distribution(m, z)));
+        CHECK(same(bingham::rotate_right(a, {0.5, 0.5, -0.5, 0.5}), Distribution(m, z)));
+    }
+    // mode, pdf, sample, spread, entropy, KL
+    {
+        std::vector<double> mo(4);
+        CHECK_OK(bingham_mode(d, a.M.data(), a.z.data(), mo.data()));
+        CHECK(same(bingham::mode(a), mo));
+        const bingham::Quaternion q = bingham::mode_quaternion(a);
+        CHECK(q.w == mo[0] && q.x == mo[1] && q.y == mo[2] && q.z == mo[3]);
+        const std::vector<double> x = bingham::sample(a, 5, 42);
+        std::vector<double> xc(20), p(5), lp(5);
+        CHECK_OK(bingham_sample(d, a.M.data(), a.z.data(), 42, 5, xc.data()));
+        CHECK(same(x, xc));
+        CHECK_OK(bingham_pdf(d, a.M.data(), a.z.data(), 5, x.data(), p.data()));
+        CHECK_OK(bingham_log_pdf(d, a.M.data(), a.z.data(), 5, x.data(), lp.data()));
+        CHECK(same(bingham::pdf_points(a, x), p) && same(bingham::log_pdf_points(a, x), lp));
+        CHECK(bingham::pdf(a, std::vector<double>(x.begin(), x.begin() + 4)) == p[0]);
+        CHECK(bingham::log_pdf(a, bingham::Quaternion(x[4], x[5], x[6], x[7])) == lp[1]);
+        std::vector<double> sp(4);
+        CHECK_OK(bingham_angular_spread(d, a.M.data(), a.z.data(), sp.data()));
+        CHECK(same(bingham::angular_spread(a), sp));
+        double h, kl;
+        CHECK_OK(bingham_entropy(d, a.M.data(), a.z.data(), &h));
+        CHECK_OK(bingham_kl_divergence(d, a.M.data(), a.z.data(), b.M.data(), b.z.data(), &kl));
+        CHECK(bingham::entropy(a) == h && bingham::kl_divergence(a, b) == kl);
+        // a non-unit point: the C message names the row
+        std::vector<double> bad = x;
+        bad[9] += 0.5;
+        std::vector<double> out(5, 7.0);
+        expect_error([&] { out = bingham::pdf_points(a, bad); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                     [&] { return bingham_pdf(d, a.M.data(), a.z.data(), 5, bad.data(), p.data()); }, "pdf row 2");
+        CHECK(same(out, std::vector<double>(5, 7.0)));
+        expect_error([&] { (void)bingham::pdf(a, {1.0, 0.0}); }, BINGHAM_ERR_INVALID_DIMENSION, "pdf size");
+        std::vector<double> wc(16), wzc(4);
+        CHECK_OK(bingham_mle_samples(d, 5, x.data(), nullptr, wc.data(), wzc.data()));
+        CHECK(same(bingham::mle_samples(4, x), Distribution(wc, wzc)));
+    }
+    // noise helpers, vector observation
+    {
+        std::vector<double> m(16), z(4);
+        CHECK_OK(bingham_noise_from_angle_std(4, 0.05, m.data(), z.data()));
+        CHECK(same(bingham::noise_from_angle_std(4, 0.05), Distribution(m, z)));
+        CHECK(same(bingham::noise_from_angle_std_deg(4, 2.0), bingham::noise_from_angle_std(4, 2.0 * PI / 180.0)));
+        CHECK(same(bingham::noise_from_angle_std_deg(2, 30.0), bingham::noise_from_angle_std(2, PI / 6.0)));
+        const std::array<double, 3> body = {0.6, 0.0, 0.8}, ref = {0.0, 0.0, 1.0};
+        CHECK_OK(bingham_vector_observation(body.data(), ref.data(), 40.0, m.data(), z.data()));
+        CHECK(same(bingham::vector_observation(body, ref, 40.0), Distribution(m, z)));
+        expect_error([] { (void)bingham::noise_from_angle_std_deg(4, -1.0); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                     [] {
+                         double mm[16], zz[4];
+                         return bingham_noise_from_angle_std(4, -PI / 180.0, mm, zz);
+                     },
+                     "negative sigma");
+        expect_error([] { (void)bingham::noise_from_angle_std(3, 0.1); }, BINGHAM_ERR_INVALID_DIMENSION,
+                     [] {
+                         double mm[9], zz[3];
+                         return bingham_noise_from_angle_std(3, 0.1, mm, zz);
+                     },
+                     "noise d = 3");
+    }
+    // errors: the C message, and the assigned variable is unchanged
+    {
+        const std::vector<double> nonsym = {1.0, 2.0, 0.0, 1.0};
+        Distribution keep = a;
+        expect_error([&] { keep = bingham::mle(2, nonsym); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                     [&] {
+                         double mm[4], zz[2];
+                         return bingham_mle(2, nonsym.data(), mm, zz);
+                     },
+                     "mle of a non-symmetric matrix");
+        CHECK(same(keep, a));
+        Distribution skew = b;
+        skew.M[0] = 0.5;  // not orthogonal
+        expect_error([&] { keep = bingham::multiply(a, skew); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                     [&] {
+                         double mm[16], zz[4];
+                         return bingham_multiply(d, a.M.data(), a.z.data(), skew.M.data(), skew.z.data(), mm, zz);
+                     },
+                     "multiply with a non-orthogonal M");
+        CHECK(same(keep, a));
+        expect_error([&] { keep = bingham::compose(a, bingham::noise_from_angle_std(2, 0.1)); },
+                     BINGHAM_ERR_INVALID_DIMENSION, "compose d = 4 with d = 2");
+        expect_error([] { Distribution bad({1, 0, 0, 1}, {0, 0, 0}); }, BINGHAM_ERR_INVALID_DIMENSION,
+                     "Distribution with mismatched sizes");
+        CHECK(same(keep, a));
+        try {
+            (void)bingham::mle(2, nonsym);
+        } catch (const std::runtime_error &e) {  // catchable as std::runtime_error too
+            CHECK(std::strstr(e.what(), "bingham_mle") != nullptr);
+        }
+    }
+    CHECK(bingham::version() == bingham_version());
+}
+
+// Two filters, one through the wrapper and one through C, driven by the same steps.
+static void test_filter() {
+    using bingham::Distribution;
+    using bingham::Filter;
+    const Distribution init({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}, {-1, -1, -1, 0});
+    const Distribution w = bingham::noise_from_angle_std_deg(4, 3.0);
+    const Distribution v = bingham::noise_from_angle_std_deg(4, 5.0);
+    Filter f(init);
+    CHECK(static_cast<bool>(f) && f.dim() == 4);
+    bingham_filter *c = nullptr;
+    CHECK_OK(bingham_filter_new(4, init.M.data(), init.z.data(), &c));
+    const double h = std::sqrt(0.5);
+    const bingham::Quaternion u(std::cos(0.05), std::sin(0.05), 0, 0), meas(h, 0, h, 0);
+    const double u_c[4] = {u.w, u.x, u.y, u.z}, meas_c[4] = {meas.w, meas.x, meas.y, meas.z};
+    for (int k = 0; k < 5; ++k) {
+        f.predict_rotation(u, w);
+        f.update(meas, v);
+        f.predict(w);
+        CHECK_OK(bingham_filter_predict_rotation(c, u_c, w.M.data(), w.z.data()));
+        CHECK_OK(bingham_filter_update(c, meas_c, v.M.data(), v.z.data()));
+        CHECK_OK(bingham_filter_predict(c, w.M.data(), w.z.data()));
+    }
+    f.update_vector({0, 0, 1}, {0, 1, 0}, 50.0);
+    CHECK_OK(bingham_filter_update_vector(c, std::array<double, 3>{0, 0, 1}.data(),
+                                          std::array<double, 3>{0, 1, 0}.data(), 50.0));
+    Distribution sc(std::vector<double>(16), std::vector<double>(4));
+    CHECK_OK(bingham_filter_get_state(c, sc.M.data(), sc.z.data()));
+    CHECK(same(f.state(), sc));
+    std::vector<double> mo(4), sp(4);
+    CHECK_OK(bingham_filter_mode(c, mo.data()));
+    CHECK_OK(bingham_filter_angular_spread(c, sp.data()));
+    CHECK(same(f.mode(), mo) && same(f.angular_spread(), sp) && f.uncertainty() == sp[3]);
+    const bingham::Quaternion fq = f.mode_quaternion();
+    CHECK(fq.w == mo[0] && fq.x == mo[1] && fq.y == mo[2] && fq.z == mo[3]);
+    double ll_c, llv_c;
+    CHECK_OK(bingham_filter_log_likelihood(c, meas_c, v.M.data(), v.z.data(), &ll_c));
+    CHECK_OK(bingham_filter_log_likelihood_vector(c, std::array<double, 3>{1, 0, 0}.data(),
+                                                  std::array<double, 3>{1, 0, 0}.data(), 5.0, &llv_c));
+    CHECK(f.log_likelihood(meas, v) == ll_c && f.log_likelihood_vector({1, 0, 0}, {1, 0, 0}, 5.0) == llv_c);
+
+    // errors leave the filter unchanged
+    const Distribution before = f.state();
+    expect_error([&] { f.update(bingham::Quaternion(2, 0, 0, 0), v); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [&] {
+                     const double bad[4] = {2, 0, 0, 0};
+                     return bingham_filter_update(c, bad, v.M.data(), v.z.data());
+                 },
+                 "update with a non-unit quaternion");
+    expect_error([&] { f.update(std::complex<double>(1, 0), v); }, BINGHAM_ERR_INVALID_DIMENSION,
+                 "complex measurement on a d = 4 filter");
+    expect_error([&] { f.predict(bingham::noise_from_angle_std(2, 0.1)); }, BINGHAM_ERR_INVALID_DIMENSION,
+                 "d = 2 noise on a d = 4 filter");
+    expect_error([&] { f.update_vector({0, 0, std::nan("")}, {0, 0, 1}, 1.0); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [&] {
+                     const double bb[3] = {0, 0, std::nan("")}, rr[3] = {0, 0, 1};
+                     return bingham_filter_update_vector(c, bb, rr, 1.0);
+                 },
+                 "update_vector with NaN");
+    expect_error([&] { (void)f.mode_complex(); }, BINGHAM_ERR_INVALID_DIMENSION, "mode_complex on d = 4");
+    CHECK(same(f.state(), before));
+    expect_error([] { Filter bad(Distribution({1, 0, 0, 0, 1, 0, 0, 0, 1}, {-1, -1, 0})); },
+                 BINGHAM_ERR_INVALID_DIMENSION,
+                 [] {
+                     const double mm[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, zz[3] = {-1, -1, 0};
+                     bingham_filter *x = nullptr;
+                     return bingham_filter_new(3, mm, zz, &x);
+                 },
+                 "a d = 3 filter");
+
+    // clone: independent of the original
+    Filter g = f.clone();
+    CHECK(same(g.state(), before));
+    g.update(bingham::Quaternion(1, 0, 0, 0), v);
+    CHECK(same(f.state(), before) && !same(g.state(), before));
+    f.update(bingham::Quaternion(1, 0, 0, 0), v);
+    CHECK(same(f.state(), g.state()));
+
+    // move: the moved-from filter is empty, safe to use (throws), destroy and reassign
+    Filter moved(std::move(f));
+    CHECK(!f && f.dim() == 0 && f.get() == nullptr && static_cast<bool>(moved));
+    CHECK(same(moved.state(), g.state()));
+    expect_error([&] { (void)f.mode(); }, BINGHAM_ERR_NULL_ARGUMENT, "mode of a moved-from filter");
+    expect_error([&] { f.predict(w); }, BINGHAM_ERR_NULL_ARGUMENT, "predict on a moved-from filter");
+    expect_error([&] { (void)f.clone(); }, BINGHAM_ERR_NULL_ARGUMENT, "clone of a moved-from filter");
+    f = std::move(g);  // assign into the moved-from one
+    CHECK(static_cast<bool>(f) && !g && same(f.state(), moved.state()));
+    moved = std::move(f);  // releases moved's old handle (LSan would see a leak otherwise)
+    CHECK(!f && static_cast<bool>(moved));
+    Filter &alias = moved;
+    moved = std::move(alias);  // self-move-assignment keeps the handle
+    CHECK(static_cast<bool>(moved) && moved.dim() == 4);
+
+    // d = 2: complex numbers
+    Filter axis(Distribution({1, 0, 0, 1}, {-1, 0}));
+    const Distribution w2 = bingham::noise_from_angle_std(2, 0.1);
+    axis.predict_rotation(std::polar(1.0, 0.3), w2);
+    axis.update(std::polar(1.0, 0.35), w2);
+    const std::complex<double> m2 = axis.mode_complex();
+    const std::vector<double> m2v = axis.mode();
+    CHECK(m2.real() == m2v[0] && m2.imag() == m2v[1]);
+    expect_error([&] { axis.update(bingham::Quaternion(), w2); }, BINGHAM_ERR_INVALID_DIMENSION,
+                 "quaternion on a d = 2 filter");
+    bingham_filter_free(c);
+}
+
+static void test_ahrs() {
+    const double dt = 0.01;
+    bingham::Ahrs a(dt);
+    bingham_ahrs_params p;
+    CHECK_OK(bingham_ahrs_params_default(dt, &p));
+    const bingham::AhrsParams pw = bingham::ahrs_default_params(dt);
+    CHECK(std::memcmp(&p, &pw, sizeof p) == 0);
+    bingham_ahrs *c = nullptr;
+    CHECK_OK(bingham_ahrs_new(&p, &c));
+    std::vector<double> gyr, acc, mag;
+    for (int k = 0; k < 50; ++k) {
+        const std::array<double, 3> g = {0.1, -0.05, 0.2 * std::sin(0.1 * k)}, ac = {0.3, -0.2, 9.7},
+                                    mg = {0.1, 20.0, -40.0};
+        a.update(g, ac, mg);
+        CHECK_OK(bingham_ahrs_update(c, g.data(), ac.data(), mg.data()));
+        gyr.insert(gyr.end(), g.begin(), g.end());
+        acc.insert(acc.end(), ac.begin(), ac.end());
+        mag.insert(mag.end(), mg.begin(), mg.end());
+    }
+    a.update({0, 0, 0}, {0, 0, 9.81});
+    CHECK_OK(bingham_ahrs_update(c, std::array<double, 3>{0, 0, 0}.data(), std::array<double, 3>{0, 0, 9.81}.data(),
+                                 nullptr));
+    double q[4], m[16], z[4], sp[4], bias[3];
+    CHECK_OK(bingham_ahrs_quaternion(c, q));
+    CHECK_OK(bingham_ahrs_state(c, m, z));
+    CHECK_OK(bingham_ahrs_angular_spread(c, sp));
+    CHECK_OK(bingham_ahrs_gyro_bias(c, bias));
+    const bingham::Quaternion aq = a.quaternion();
+    CHECK(aq.w == q[0] && aq.x == q[1] && aq.y == q[2] && aq.z == q[3]);
+    CHECK(same(a.state(), bingham::Distribution(std::vector<double>(m, m + 16), std::vector<double>(z, z + 4))));
+    const auto asp = a.angular_spread();
+    const auto ab = a.gyro_bias();
+    CHECK(std::memcmp(asp.data(), sp, sizeof sp) == 0 && a.uncertainty() == sp[3]);
+    CHECK(std::memcmp(ab.data(), bias, sizeof bias) == 0);
+
+    // a refused sample throws and leaves the AHRS unchanged
+    const bingham::Distribution before = a.state();
+    expect_error([&] { a.update({0, 0, std::nan("")}, {0, 0, 9.81}); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [&] {
+                     const double gg[3] = {0, 0, std::nan("")}, aa[3] = {0, 0, 9.81};
+                     return bingham_ahrs_update(c, gg, aa, nullptr);
+                 },
+                 "AHRS sample with NaN");
+    CHECK(same(a.state(), before));
+    expect_error([] { bingham::Ahrs bad(-1.0); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [] {
+                     bingham_ahrs_params pp;
+                     return bingham_ahrs_params_default(-1.0, &pp);
+                 },
+                 "negative sample time");
+    bingham::AhrsParams bad_p = pw;
+    bad_p.acc_noise = -1;
+    expect_error([&] { bingham::Ahrs bad(bad_p); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [&] {
+                     bingham_ahrs *x = nullptr;
+                     return bingham_ahrs_new(&bad_p, &x);
+                 },
+                 "bad parameter");
+    expect_error([&] { bingham::Distribution s2 = bingham::noise_from_angle_std(2, 0.1); a.set_state(s2); },
+                 BINGHAM_ERR_INVALID_DIMENSION, "set_state with d = 2");
+
+    // batch = one by one; clone independent; set_state
+    bingham::Ahrs fresh(pw);
+    bingham::Ahrs copy = fresh.clone();
+    const std::vector<double> quats = fresh.update_batch(gyr, acc, mag);
+    CHECK(quats.size() == 200);
+    for (std::size_t k = 0; k < 50; ++k) {
+        copy.update({gyr[3 * k], gyr[3 * k + 1], gyr[3 * k + 2]}, {acc[3 * k], acc[3 * k + 1], acc[3 * k + 2]},
+                    {mag[3 * k], mag[3 * k + 1], mag[3 * k + 2]});
+        const bingham::Quaternion qk = copy.quaternion();
+        CHECK(qk.w == quats[4 * k] && qk.x == quats[4 * k + 1] && qk.y == quats[4 * k + 2] &&
+              qk.z == quats[4 * k + 3]);
+    }
+    bingham::Ahrs other = copy.clone();
+    other.update({1, 0, 0}, {0, 0, 9.81});
+    CHECK(same(copy.state(), fresh.state()) && !same(other.state(), copy.state()));
+    expect_error([&] { (void)fresh.update_batch(gyr, acc, {1.0}); }, BINGHAM_ERR_INVALID_DIMENSION,
+                 "batch size mismatch");
+    other.set_state(before);
+    CHECK(same(other.state(), before));
+
+    // move
+    bingham::Ahrs moved(std::move(a));
+    CHECK(!a && static_cast<bool>(moved) && same(moved.state(), before));
+    expect_error([&] { (void)a.quaternion(); }, BINGHAM_ERR_NULL_ARGUMENT, "moved-from AHRS");
+    a = std::move(other);
+    moved = std::move(a);
+    CHECK(!a && static_cast<bool>(moved) && same(moved.state(), before));
+    bingham_ahrs_free(c);
+}
+
+int main() {
+    try {
+        test_free_functions();
+        test_filter();
+        test_ahrs();
+    } catch (const std::exception &e) {
+        std::fprintf(stderr, "unexpected exception: %s\n", e.what());
+        return 1;
+    }
+    return check_summary(__cplusplus >= 202002L ? "wrapper_plain (C++20)" : "wrapper_plain (C++17)");
+}

@@ -1,0 +1,860 @@
+/*
+ * bingham.hpp -- header-only C++17 interface over the C API of the bingham library (bingham.h).
+ * SPDX-License-Identifier: MIT OR Apache-2.0
+ *
+ * Nothing of the math lives here: every function calls the C ABI, turns a non-OK status into a
+ * bingham::Error exception and owns the handles (RAII, move-only). Link the library as for C
+ * (`-lbingham`, or CMake's `bingham::bingham`).
+ *
+ * Conventions (as in bingham.h):
+ * - A distribution is (M, z): M d x d orthogonal, stored ROW-MAJOR in a std::vector<double>; its
+ *   COLUMNS are the principal directions, column i belongs to z[i], the LAST column is the mode.
+ *   Results come with z ascending and z[d-1] = 0.
+ * - F(Z) uses the surface measure of the sphere: F(0) = 2*pi (d = 2), 4*pi (d = 3), 2*pi^2 (d = 4).
+ * - Quaternions are SCALAR FIRST, (w, x, y, z), and map sensor to world: v_world = q v_sensor q*.
+ *   bingham::Quaternion has named fields; it converts to and from Eigen::Quaterniond by the
+ *   named accessors w(), x(), y(), z() -- never through Eigen's coeffs(), which is (x, y, z, w).
+ *   Complex numbers (d = 2, axes in the plane) are std::complex<double> (re, im).
+ * - Angles are radians unless a function name ends in _deg; gyroscope rad/s, accelerometer m/s^2.
+ *
+ * Eigen support: include <Eigen/Core> and <Eigen/Geometry> (or <Eigen/Dense> with
+ * <Eigen/Geometry>) BEFORE this header, or include "bingham_eigen.hpp", which does both. Then
+ * bingham::Quaternion converts to/from Eigen::Quaterniond, Distribution is constructible from any
+ * Eigen matrix for M (either storage order: entries are read as M(i, j)) and vector for z, and
+ * the functions taking points and 3-vectors accept Eigen vectors. Define BINGHAM_NO_EIGEN to turn
+ * the detection off. The two configurations live in different inline namespaces, so translation
+ * units that differ in it do not violate the one-definition rule (their Filter types differ).
+ *
+ * Thread safety: as the C API -- one thread at a time per Filter/Ahrs object; everything else may
+ * run concurrently.
+ */
+#ifndef BINGHAM_HPP
+#define BINGHAM_HPP
+
+#include <array>
+#include <cmath>
+#include <complex>
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "bingham.h"
+
+#if !defined(BINGHAM_NO_EIGEN) && defined(EIGEN_WORLD_VERSION) && defined(EIGEN_GEOMETRY_MODULE_H)
+#define BINGHAM_HPP_EIGEN 1
+#else
+#define BINGHAM_HPP_EIGEN 0
+#endif
+
+namespace bingham {
+
+/// The calling thread's last error message of the C library (empty if nothing failed yet).
+inline std::string last_error_message() {
+    std::size_t len = 0;
+    bingham_last_error_message(nullptr, 0, &len);
+    std::string msg(len + 1, '\0');
+    bingham_last_error_message(&msg[0], msg.size(), &len);
+    msg.resize(len < msg.size() ? len : msg.size() - 1);
+    return msg;
+}
+
+/// The version of the library actually loaded, "MAJOR.MINOR.PATCH".
+inline std::string version() { return bingham_version(); }
+
+/// The exception thrown by every wrapper function: the C status and the library's message.
+///
+/// `what()` is the message of `bingham_last_error_message()` at the failing call (e.g.
+/// "bingham_mle: s: invalid argument: not symmetric ..."), or, for size mismatches caught by the
+/// wrapper before calling the library, a message naming the C++ function. On any Error, no
+/// output and no object has been changed (strong exception guarantee).
+class Error : public std::runtime_error {
+public:
+    Error(bingham_status status, const std::string &message)
+        : std::runtime_error(message), status_(status) {}
+    /// The C status (never BINGHAM_OK).
+    bingham_status status() const noexcept { return status_; }
+    /// The message (same as what()).
+    std::string message() const { return what(); }
+
+private:
+    bingham_status status_;
+};
+
+namespace detail {
+inline void check(bingham_status st) {
+    if (st != BINGHAM_OK) throw Error(st, last_error_message());
+}
+inline void require(bool ok, bingham_status st, const char *where, const char *what) {
+    if (!ok) throw Error(st, std::string(where) + ": " + bingham_status_str(static_cast<int>(st)) + ": " + what);
+}
+inline void require_dim(bool ok, const char *where, const char *what) {
+    require(ok, BINGHAM_ERR_INVALID_DIMENSION, where, what);
+}
+}  // namespace detail
+
+#if BINGHAM_HPP_EIGEN
+inline namespace with_eigen {
+#else
+inline namespace without_eigen {
+#endif
+
+/// A unit quaternion, SCALAR FIRST: w + x i + y j + z k (named fields, so the order cannot be
+/// mixed up). Orientations map sensor to world. With Eigen, converts implicitly to and from
+/// Eigen::Quaterniond (mapping w, x, y, z by name).
+struct Quaternion {
+    double w = 1, x = 0, y = 0, z = 0;
+    /// The identity (1, 0, 0, 0).
+    Quaternion() = default;
+    /// (w, x, y, z), scalar first.
+    Quaternion(double w_, double x_, double y_, double z_) : w(w_), x(x_), y(y_), z(z_) {}
+    /// The scalar-first array (w, x, y, z).
+    std::array<double, 4> array() const { return {w, x, y, z}; }
+    /// From a scalar-first array (w, x, y, z).
+    static Quaternion from_array(const double *wxyz) { return {wxyz[0], wxyz[1], wxyz[2], wxyz[3]}; }
+#if BINGHAM_HPP_EIGEN
+    /// From any Eigen quaternion (Quaterniond, Map<Quaterniond>, ...): by w(), x(), y(), z().
+    template <class Derived>
+    Quaternion(const Eigen::QuaternionBase<Derived> &q)  // NOLINT: implicit on purpose
+        : w(q.w()), x(q.x()), y(q.y()), z(q.z()) {}
+    /// To Eigen::Quaterniond(w, x, y, z) (Eigen's constructor is scalar first too).
+    operator Eigen::Quaterniond() const { return Eigen::Quaterniond(w, x, y, z); }  // NOLINT
+    /// The same as Eigen::Quaterniond.
+    Eigen::Quaterniond eigen() const { return *this; }
+#endif
+};
+
+/// A Bingham distribution (M, z) on the unit sphere S^{d-1} in R^d: a plain value.
+///
+/// `M` is d*d ROW-MAJOR (orthogonal; columns are the principal directions, column i belongs to
+/// `z[i]`, the last column is the mode after normalization); `z` has d entries (any order and
+/// shift on input; library results are ascending with z[d-1] = 0).
+struct Distribution {
+    std::size_t d = 0;
+    std::vector<double> M;  ///< d x d, row-major
+    std::vector<double> z;  ///< d concentrations
+
+    Distribution() = default;
+    /// From a row-major M (d*d entries) and z (d entries); throws Error
+    /// (BINGHAM_ERR_INVALID_DIMENSION) if the sizes do not match.
+    Distribution(std::vector<double> M_, std::vector<double> z_) : d(z_.size()), M(std::move(M_)), z(std::move(z_)) {
+        validate("bingham::Distribution");
+    }
+    /// Throws Error (BINGHAM_ERR_INVALID_DIMENSION) unless M has d*d and z has d entries.
+    void validate(const char *where) const {
+        detail::require_dim(d >= 1 && z.size() == d && M.size() == d * d, where,
+                            "Distribution needs z of size d and M of size d*d");
+    }
+    /// Entry M(i, j) of the row-major matrix.
+    double m(std::size_t i, std::size_t j) const { return M[i * d + j]; }
+
+#if BINGHAM_HPP_EIGEN
+    /// From Eigen: M any d x d matrix expression (row- or column-major; read as M(i, j) and stored
+    /// row-major), z any vector of d entries.
+    template <class DM, class DZ>
+    Distribution(const Eigen::MatrixBase<DM> &M_, const Eigen::MatrixBase<DZ> &z_) : d(static_cast<std::size_t>(z_.size())) {
+        detail::require_dim(z_.cols() == 1 || z_.rows() == 1, "bingham::Distribution", "z must be a vector");
+        detail::require_dim(static_cast<std::size_t>(M_.rows()) == d && static_cast<std::size_t>(M_.cols()) == d,
+                            "bingham::Distribution", "M must be d x d with d = z.size()");
+        M.resize(d * d);
+        z.resize(d);
+        for (std::size_t i = 0; i < d; ++i) {
+            z[i] = z_(static_cast<Eigen::Index>(i));
+            for (std::size_t j = 0; j < d; ++j)
+                M[i * d + j] = M_(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+        }
+    }
+    /// M as an Eigen matrix (assign to Matrix4d / Matrix2d or a row-major type as you like).
+    Eigen::MatrixXd matrix() const {
+        Eigen::MatrixXd r(static_cast<Eigen::Index>(d), static_cast<Eigen::Index>(d));
+        for (std::size_t i = 0; i < d; ++i)
+            for (std::size_t j = 0; j < d; ++j) r(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = m(i, j);
+        return r;
+    }
+    /// z as an Eigen vector.
+    Eigen::VectorXd concentrations() const {
+        return Eigen::Map<const Eigen::VectorXd>(z.data(), static_cast<Eigen::Index>(z.size()));
+    }
+#endif
+};
+
+namespace impl {
+// Quaternion overloads of functions that also take std::vector<double> are templates, so that
+// a braced list {w, x, y, z} is not ambiguous (it goes to the std::vector overload).
+template <class Q>
+#if BINGHAM_HPP_EIGEN
+using if_quaternion = std::enable_if_t<std::is_same_v<Q, Quaternion> ||
+                                           std::is_base_of_v<Eigen::QuaternionBase<Q>, Q>, int>;
+#else
+using if_quaternion = std::enable_if_t<std::is_same_v<Q, Quaternion>, int>;
+#endif
+inline void check_point(const Distribution &b, std::size_t n, const char *where) {
+    b.validate(where);
+    detail::require_dim(n == b.d, where, "the vector must have d entries");
+}
+#if BINGHAM_HPP_EIGEN
+// Copies an Eigen vector expression into a std::vector.
+template <class D>
+std::vector<double> to_vector(const Eigen::MatrixBase<D> &v, const char *where) {
+    detail::require_dim(v.cols() == 1 || v.rows() == 1, where, "expected a vector");
+    std::vector<double> r(static_cast<std::size_t>(v.size()));
+    for (Eigen::Index i = 0; i < v.size(); ++i) r[static_cast<std::size_t>(i)] = v(i);
+    return r;
+}
+template <class D>
+std::array<double, 3> to_array3(const Eigen::MatrixBase<D> &v, const char *where) {
+    detail::require_dim(v.size() == 3 && (v.cols() == 1 || v.rows() == 1), where, "expected a 3-vector");
+    return {v(0), v(1), v(2)};
+}
+// Copies an n x d Eigen matrix (one point per row, either storage order) into row-major storage.
+template <class D>
+std::vector<double> rows_to_vector(const Eigen::MatrixBase<D> &x) {
+    std::vector<double> r(static_cast<std::size_t>(x.size()));
+    std::size_t k = 0;
+    for (Eigen::Index i = 0; i < x.rows(); ++i)
+        for (Eigen::Index j = 0; j < x.cols(); ++j) r[k++] = x(i, j);
+    return r;
+}
+#endif
+}  // namespace impl
+
+// ---- normalization constant ------------------------------------------------------------------
+
+/// A value with its gradient (and, from log_normalization_hessian(), the row-major Hessian).
+struct ValueGradient {
+    double value = 0;
+    std::vector<double> gradient;  ///< in the order of the input z
+    std::vector<double> hessian;   ///< d x d row-major (log_normalization_hessian() only)
+};
+
+/// F(Z) = integral over S^{d-1} of exp(x^T Z x) (surface measure). Throws
+/// Error(BINGHAM_ERR_NUMERICAL) where F overflows a double: use log_normalization_constant().
+inline double normalization_constant(const std::vector<double> &z) {
+    double f = 0;
+    detail::check(bingham_normalization_constant(z.size(), z.data(), &f, nullptr));
+    return f;
+}
+/// F(Z) and dF/dz_i.
+inline ValueGradient normalization_constant_gradient(const std::vector<double> &z) {
+    ValueGradient r;
+    r.gradient.resize(z.size());
+    detail::check(bingham_normalization_constant(z.size(), z.data(), &r.value, r.gradient.data()));
+    return r;
+}
+/// log F(Z), finite for every finite z.
+inline double log_normalization_constant(const std::vector<double> &z) {
+    double f = 0;
+    detail::check(bingham_log_normalization_constant(z.size(), z.data(), &f, nullptr));
+    return f;
+}
+/// log F(Z) and d log F/dz_i = E[x_i^2] in the principal frame (the moments; they sum to 1).
+inline ValueGradient log_normalization_constant_gradient(const std::vector<double> &z) {
+    ValueGradient r;
+    r.gradient.resize(z.size());
+    detail::check(bingham_log_normalization_constant(z.size(), z.data(), &r.value, r.gradient.data()));
+    return r;
+}
+/// log F(Z) with gradient and Hessian (exact).
+inline ValueGradient log_normalization_hessian(const std::vector<double> &z) {
+    ValueGradient r;
+    r.gradient.resize(z.size());
+    r.hessian.resize(z.size() * z.size());
+    detail::check(
+        bingham_log_normalization_hessian(z.size(), z.data(), &r.value, r.gradient.data(), r.hessian.data()));
+    return r;
+}
+/// APPROXIMATE log F and gradient (Kume & Wood saddlepoint), for comparison with other libraries.
+inline ValueGradient log_normalization_constant_saddlepoint(const std::vector<double> &z) {
+    ValueGradient r;
+    r.gradient.resize(z.size());
+    detail::check(bingham_log_normalization_constant_saddlepoint(z.size(), z.data(), &r.value, r.gradient.data()));
+    return r;
+}
+
+// ---- distributions ---------------------------------------------------------------------------
+
+/// The second moment S = E[x x^T] = M diag(omega) M^T, d x d row-major (trace 1).
+inline std::vector<double> second_moment(const Distribution &b) {
+    b.validate("bingham::second_moment");
+    std::vector<double> s(b.d * b.d);
+    detail::check(bingham_second_moment(b.d, b.M.data(), b.z.data(), s.data()));
+    return s;
+}
+
+/// Maximum-likelihood (moment-matched) Bingham distribution for a second-moment matrix S
+/// (d x d row-major, symmetric PSD; any positive multiple).
+inline Distribution mle(std::size_t d, const std::vector<double> &s) {
+    detail::require_dim(s.size() == d * d, "bingham::mle", "S must have d*d entries");
+    Distribution r;
+    r.d = d;
+    r.M.resize(d * d);
+    r.z.resize(d);
+    detail::check(bingham_mle(d, s.data(), r.M.data(), r.z.data()));
+    return r;
+}
+
+/// Maximum-likelihood fit to n unit samples (n x d row-major), with optional weights (empty: equal).
+inline Distribution mle_samples(std::size_t d, const std::vector<double> &x, const std::vector<double> &w = {}) {
+    detail::require_dim(d > 0 && x.size() % d == 0, "bingham::mle_samples", "x must have n*d entries");
+    const std::size_t n = x.size() / d;
+    detail::require_dim(w.empty() || w.size() == n, "bingham::mle_samples", "w must be empty or have n entries");
+    Distribution r;
+    r.d = d;
+    r.M.resize(d * d);
+    r.z.resize(d);
+    detail::check(bingham_mle_samples(d, n, x.data(), w.empty() ? nullptr : w.data(), r.M.data(), r.z.data()));
+    return r;
+}
+
+namespace impl {
+using Binary = bingham_status (*)(size_t, const double *, const double *, const double *, const double *, double *,
+                                  double *);
+inline Distribution binary(Binary fn, const Distribution &a, const Distribution &b, const char *where) {
+    a.validate(where);
+    b.validate(where);
+    detail::require_dim(a.d == b.d, where, "the two distributions differ in d");
+    Distribution r;
+    r.d = a.d;
+    r.M.resize(a.d * a.d);
+    r.z.resize(a.d);
+    detail::check(fn(a.d, a.M.data(), a.z.data(), b.M.data(), b.z.data(), r.M.data(), r.z.data()));
+    return r;
+}
+}  // namespace impl
+
+/// The product of the densities (Bayes' rule), renormalized. Exact.
+inline Distribution multiply(const Distribution &a, const Distribution &b) {
+    return impl::binary(bingham_multiply, a, b, "bingham::multiply");
+}
+/// The moment-matched distribution of x (+) y (complex product d = 2, Hamilton product d = 4).
+inline Distribution compose(const Distribution &a, const Distribution &b) {
+    return impl::binary(bingham_compose, a, b, "bingham::compose");
+}
+/// The distribution of u (+) x (d = 2, 4), exact.
+inline Distribution rotate_left(const Distribution &b, const std::vector<double> &u) {
+    impl::check_point(b, u.size(), "bingham::rotate_left");
+    Distribution r = b;
+    detail::check(bingham_rotate_left(b.d, b.M.data(), b.z.data(), u.data(), r.M.data(), r.z.data()));
+    return r;
+}
+/// The distribution of x (+) u (d = 2, 4), exact.
+inline Distribution rotate_right(const Distribution &b, const std::vector<double> &u) {
+    impl::check_point(b, u.size(), "bingham::rotate_right");
+    Distribution r = b;
+    detail::check(bingham_rotate_right(b.d, b.M.data(), b.z.data(), u.data(), r.M.data(), r.z.data()));
+    return r;
+}
+/// u (+) x for a quaternion u (d = 4).
+template <class Q, impl::if_quaternion<Q> = 0>
+Distribution rotate_left(const Distribution &b, const Q &u) {
+    const auto a = Quaternion(u).array();
+    return rotate_left(b, std::vector<double>(a.begin(), a.end()));
+}
+/// x (+) u for a quaternion u (d = 4).
+template <class Q, impl::if_quaternion<Q> = 0>
+Distribution rotate_right(const Distribution &b, const Q &u) {
+    const auto a = Quaternion(u).array();
+    return rotate_right(b, std::vector<double>(a.begin(), a.end()));
+}
+
+/// The mode (a unit vector of d entries; -mode is a mode as well).
+inline std::vector<double> mode(const Distribution &b) {
+    b.validate("bingham::mode");
+    std::vector<double> r(b.d);
+    detail::check(bingham_mode(b.d, b.M.data(), b.z.data(), r.data()));
+    return r;
+}
+/// The mode of a distribution of rotations (d = 4) as a quaternion.
+inline Quaternion mode_quaternion(const Distribution &b) {
+    detail::require_dim(b.d == 4, "bingham::mode_quaternion", "needs d = 4");
+    return Quaternion::from_array(mode(b).data());
+}
+
+/// The density at n points (n x d row-major), surface measure.
+inline std::vector<double> pdf_points(const Distribution &b, const std::vector<double> &x) {
+    b.validate("bingham::pdf_points");
+    detail::require_dim(x.size() % b.d == 0, "bingham::pdf_points", "x must have n*d entries");
+    std::vector<double> p(x.size() / b.d);
+    detail::check(bingham_pdf(b.d, b.M.data(), b.z.data(), p.size(), x.empty() ? nullptr : x.data(), p.data()));
+    return p;
+}
+/// The log density at n points (n x d row-major).
+inline std::vector<double> log_pdf_points(const Distribution &b, const std::vector<double> &x) {
+    b.validate("bingham::log_pdf_points");
+    detail::require_dim(x.size() % b.d == 0, "bingham::log_pdf_points", "x must have n*d entries");
+    std::vector<double> p(x.size() / b.d);
+    detail::check(bingham_log_pdf(b.d, b.M.data(), b.z.data(), p.size(), x.empty() ? nullptr : x.data(), p.data()));
+    return p;
+}
+/// The density at one unit vector x (d entries).
+inline double pdf(const Distribution &b, const std::vector<double> &x) {
+    impl::check_point(b, x.size(), "bingham::pdf");
+    return pdf_points(b, x)[0];
+}
+/// The log density at one unit vector x (d entries).
+inline double log_pdf(const Distribution &b, const std::vector<double> &x) {
+    impl::check_point(b, x.size(), "bingham::log_pdf");
+    return log_pdf_points(b, x)[0];
+}
+/// The density at a quaternion (d = 4).
+template <class Q, impl::if_quaternion<Q> = 0>
+double pdf(const Distribution &b, const Q &q) {
+    const auto a = Quaternion(q).array();
+    return pdf(b, std::vector<double>(a.begin(), a.end()));
+}
+/// The log density at a quaternion (d = 4).
+template <class Q, impl::if_quaternion<Q> = 0>
+double log_pdf(const Distribution &b, const Q &q) {
+    const auto a = Quaternion(q).array();
+    return log_pdf(b, std::vector<double>(a.begin(), a.end()));
+}
+
+/// Differential entropy (nats, surface measure).
+inline double entropy(const Distribution &b) {
+    b.validate("bingham::entropy");
+    double h = 0;
+    detail::check(bingham_entropy(b.d, b.M.data(), b.z.data(), &h));
+    return h;
+}
+/// KL(a || b) in nats.
+inline double kl_divergence(const Distribution &a, const Distribution &b) {
+    a.validate("bingham::kl_divergence");
+    b.validate("bingham::kl_divergence");
+    detail::require_dim(a.d == b.d, "bingham::kl_divergence", "the two distributions differ in d");
+    double kl = 0;
+    detail::check(bingham_kl_divergence(a.d, a.M.data(), a.z.data(), b.M.data(), b.z.data(), &kl));
+    return kl;
+}
+
+/// n samples (n x d row-major unit vectors), deterministic in `seed`.
+inline std::vector<double> sample(const Distribution &b, std::size_t n, std::uint64_t seed) {
+    b.validate("bingham::sample");
+    std::vector<double> x(n * b.d);
+    detail::check(bingham_sample(b.d, b.M.data(), b.z.data(), seed, n, x.empty() ? nullptr : x.data()));
+    return x;
+}
+
+/// The angular spread in radians (d = 2, 4): entries 0..d-2 along the principal directions,
+/// entry d-1 the total (d = 4: the RMS of 2 sin(theta/2), ~ the RMS rotation angle from the mode).
+inline std::vector<double> angular_spread(const Distribution &b) {
+    b.validate("bingham::angular_spread");
+    std::vector<double> s(b.d);
+    detail::check(bingham_angular_spread(b.d, b.M.data(), b.z.data(), s.data()));
+    return s;
+}
+
+/// Isotropic rotation noise with angular standard deviation `sigma` in RADIANS (per axis, d = 4;
+/// the angle, d = 2), mode at the identity: the process or measurement noise of a Filter.
+inline Distribution noise_from_angle_std(std::size_t d, double sigma) {
+    Distribution r;
+    r.d = d;
+    r.M.resize(d * d);
+    r.z.resize(d);
+    detail::check(bingham_noise_from_angle_std(d, sigma, r.M.data(), r.z.data()));
+    return r;
+}
+/// As noise_from_angle_std(), with `sigma_deg` in DEGREES.
+inline Distribution noise_from_angle_std_deg(std::size_t d, double sigma_deg) {
+    return noise_from_angle_std(d, sigma_deg * (3.14159265358979323846 / 180.0));
+}
+
+/// The likelihood of a measured unit direction `body` (sensor frame) of the known unit direction
+/// `reference` (world frame), von Mises-Fisher noise `kappa` (~ 1/sigma^2), as a Bingham
+/// distribution of the orientation (d = 4).
+inline Distribution vector_observation(const std::array<double, 3> &body, const std::array<double, 3> &reference,
+                                       double kappa) {
+    Distribution r;
+    r.d = 4;
+    r.M.resize(16);
+    r.z.resize(4);
+    detail::check(bingham_vector_observation(body.data(), reference.data(), kappa, r.M.data(), r.z.data()));
+    return r;
+}
+
+#if BINGHAM_HPP_EIGEN
+/// The density at one point given as an Eigen vector (d entries).
+template <class D>
+double pdf(const Distribution &b, const Eigen::MatrixBase<D> &x) {
+    return pdf(b, impl::to_vector(x, "bingham::pdf"));
+}
+/// The log density at one point given as an Eigen vector (d entries).
+template <class D>
+double log_pdf(const Distribution &b, const Eigen::MatrixBase<D> &x) {
+    return log_pdf(b, impl::to_vector(x, "bingham::log_pdf"));
+}
+/// The density at n points, the rows of an n x d Eigen matrix (either storage order).
+template <class D>
+Eigen::VectorXd pdf_points(const Distribution &b, const Eigen::MatrixBase<D> &x) {
+    detail::require_dim(static_cast<std::size_t>(x.cols()) == b.d, "bingham::pdf_points", "x must be n x d");
+    const std::vector<double> p = pdf_points(b, impl::rows_to_vector(x));
+    return Eigen::Map<const Eigen::VectorXd>(p.data(), static_cast<Eigen::Index>(p.size()));
+}
+/// The log density at n points, the rows of an n x d Eigen matrix (either storage order).
+template <class D>
+Eigen::VectorXd log_pdf_points(const Distribution &b, const Eigen::MatrixBase<D> &x) {
+    detail::require_dim(static_cast<std::size_t>(x.cols()) == b.d, "bingham::log_pdf_points", "x must be n x d");
+    const std::vector<double> p = log_pdf_points(b, impl::rows_to_vector(x));
+    return Eigen::Map<const Eigen::VectorXd>(p.data(), static_cast<Eigen::Index>(p.size()));
+}
+/// n samples as the rows of an n x d Eigen matrix.
+inline Eigen::MatrixXd sample_matrix(const Distribution &b, std::size_t n, std::uint64_t seed) {
+    const std::vector<double> x = sample(b, n, seed);
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    return Eigen::Map<const RowMajor>(x.data(), static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(b.d));
+}
+/// The second moment as an Eigen matrix.
+inline Eigen::MatrixXd second_moment_matrix(const Distribution &b) {
+    const std::vector<double> s = second_moment(b);
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    return Eigen::Map<const RowMajor>(s.data(), static_cast<Eigen::Index>(b.d), static_cast<Eigen::Index>(b.d));
+}
+/// The MLE for a second-moment matrix given as an Eigen matrix (either storage order).
+template <class D>
+Distribution mle(const Eigen::MatrixBase<D> &s) {
+    detail::require_dim(s.rows() == s.cols(), "bingham::mle", "S must be square");
+    return mle(static_cast<std::size_t>(s.rows()), impl::rows_to_vector(s));
+}
+/// vector_observation() with Eigen 3-vectors.
+template <class DB, class DR>
+Distribution vector_observation(const Eigen::MatrixBase<DB> &body, const Eigen::MatrixBase<DR> &reference,
+                                double kappa) {
+    return vector_observation(impl::to_array3(body, "bingham::vector_observation"),
+                              impl::to_array3(reference, "bingham::vector_observation"), kappa);
+}
+#endif
+
+// ---- the recursive Bingham filter ------------------------------------------------------------
+
+/// The recursive Bingham filter (d = 2: axes as complex numbers; d = 4: orientations as
+/// quaternions, scalar first). Owns a `bingham_filter *`; move-only, copy with clone().
+///
+/// Model: x[k+1] = x[k] (+) w[k], measurement = x[k] (+) v[k], with Bingham noises w, v (pass the
+/// same noise object every step: the library caches its moments). A moved-from Filter is empty:
+/// its methods throw Error(BINGHAM_ERR_NULL_ARGUMENT); destroying or assigning to it is fine.
+class Filter {
+public:
+    /// A filter with the initial estimate `initial` (d = 2 or 4).
+    explicit Filter(const Distribution &initial) {
+        initial.validate("bingham::Filter");
+        detail::check(bingham_filter_new(initial.d, initial.M.data(), initial.z.data(), &f_));
+        d_ = initial.d;
+    }
+    ~Filter() { bingham_filter_free(f_); }
+    Filter(Filter &&o) noexcept : f_(std::exchange(o.f_, nullptr)), d_(std::exchange(o.d_, 0)) {}
+    Filter &operator=(Filter &&o) noexcept {
+        if (this != &o) {
+            bingham_filter_free(f_);
+            f_ = std::exchange(o.f_, nullptr);
+            d_ = std::exchange(o.d_, 0);
+        }
+        return *this;
+    }
+    Filter(const Filter &) = delete;
+    Filter &operator=(const Filter &) = delete;
+
+    /// An independent copy (state and cached noise).
+    Filter clone() const {
+        require("bingham::Filter::clone");
+        bingham_filter *c = nullptr;
+        detail::check(bingham_filter_clone(f_, &c));
+        return Filter(c, d_);
+    }
+    /// False for a moved-from filter.
+    explicit operator bool() const noexcept { return f_ != nullptr; }
+    /// The dimension, 2 or 4 (0 when empty).
+    std::size_t dim() const noexcept { return d_; }
+    /// The C handle (owned by this object).
+    bingham_filter *get() noexcept { return f_; }
+    const bingham_filter *get() const noexcept { return f_; }
+
+    /// Prediction: x <- x (+) w, w ~ noise (e.g. noise_from_angle_std_deg(4, 0.5)).
+    void predict(const Distribution &noise) {
+        check_noise(noise, "bingham::Filter::predict");
+        detail::check(bingham_filter_predict(f_, noise.M.data(), noise.z.data()));
+    }
+    /// Prediction with a body-frame rotation increment (d = 4), e.g. from a gyroscope.
+    void predict_rotation(const Quaternion &u, const Distribution &noise) { predict_rotation_raw(vec(u), noise); }
+    /// Prediction turning an axis (d = 2) by the unit complex number u.
+    void predict_rotation(std::complex<double> u, const Distribution &noise) { predict_rotation_raw(vec(u), noise); }
+
+    /// Update with a measured orientation (d = 4).
+    void update(const Quaternion &measurement, const Distribution &noise) { update_raw(vec(measurement), noise); }
+    /// Update with a measured axis (d = 2).
+    void update(std::complex<double> measurement, const Distribution &noise) { update_raw(vec(measurement), noise); }
+
+    double log_likelihood(const Quaternion &measurement, const Distribution &noise) const {
+        return log_likelihood_raw(vec(measurement), noise);
+    }
+    double log_likelihood(std::complex<double> measurement, const Distribution &noise) const {
+        return log_likelihood_raw(vec(measurement), noise);
+    }
+
+    /// Update with a measured unit direction `body` (sensor frame) of the known unit `reference`
+    /// (world frame), von Mises-Fisher concentration `kappa` (d = 4).
+    void update_vector(const std::array<double, 3> &body, const std::array<double, 3> &reference, double kappa) {
+        require("bingham::Filter::update_vector");
+        detail::check(bingham_filter_update_vector(f_, body.data(), reference.data(), kappa));
+    }
+    /// Log predictive density of a measured direction (d = 4); the filter is not changed.
+    double log_likelihood_vector(const std::array<double, 3> &body, const std::array<double, 3> &reference,
+                                 double kappa) const {
+        require("bingham::Filter::log_likelihood_vector");
+        double out = 0;
+        detail::check(bingham_filter_log_likelihood_vector(f_, body.data(), reference.data(), kappa, &out));
+        return out;
+    }
+
+    /// The state (M row-major, z ascending with z[d-1] = 0; the last column of M is the mode).
+    Distribution state() const {
+        require("bingham::Filter::state");
+        Distribution r;
+        r.d = d_;
+        r.M.resize(d_ * d_);
+        r.z.resize(d_);
+        detail::check(bingham_filter_get_state(f_, r.M.data(), r.z.data()));
+        return r;
+    }
+    /// Replaces the state (re-initialization); the dimension stays.
+    void set_state(const Distribution &s) {
+        check_noise(s, "bingham::Filter::set_state");
+        detail::check(bingham_filter_set_state(f_, s.M.data(), s.z.data()));
+    }
+    /// The estimate (the mode, d entries).
+    std::vector<double> mode() const {
+        require("bingham::Filter::mode");
+        std::vector<double> r(d_);
+        detail::check(bingham_filter_mode(f_, r.data()));
+        return r;
+    }
+    /// The estimate as a quaternion (d = 4), sign arbitrary (q and -q are the same rotation).
+    Quaternion mode_quaternion() const {
+        require("bingham::Filter::mode_quaternion");
+        detail::require_dim(d_ == 4, "bingham::Filter::mode_quaternion", "needs a d = 4 filter");
+        return Quaternion::from_array(mode().data());
+    }
+    /// The estimate as a unit complex number (d = 2).
+    std::complex<double> mode_complex() const {
+        require("bingham::Filter::mode_complex");
+        detail::require_dim(d_ == 2, "bingham::Filter::mode_complex", "needs a d = 2 filter");
+        const std::vector<double> m = mode();
+        return {m[0], m[1]};
+    }
+    /// The angular spread in radians: per principal direction, the total last.
+    std::vector<double> angular_spread() const {
+        require("bingham::Filter::angular_spread");
+        std::vector<double> s(d_);
+        detail::check(bingham_filter_angular_spread(f_, s.data()));
+        return s;
+    }
+    /// The total angular spread in radians (d = 4: ~ the RMS rotation angle from the estimate).
+    double uncertainty() const { return angular_spread().back(); }
+
+#if BINGHAM_HPP_EIGEN
+    /// update_vector() with Eigen 3-vectors.
+    template <class DB, class DR>
+    void update_vector(const Eigen::MatrixBase<DB> &body, const Eigen::MatrixBase<DR> &reference, double kappa) {
+        update_vector(impl::to_array3(body, "bingham::Filter::update_vector"),
+                      impl::to_array3(reference, "bingham::Filter::update_vector"), kappa);
+    }
+    /// log_likelihood_vector() with Eigen 3-vectors.
+    template <class DB, class DR>
+    double log_likelihood_vector(const Eigen::MatrixBase<DB> &body, const Eigen::MatrixBase<DR> &reference,
+                                 double kappa) const {
+        return log_likelihood_vector(impl::to_array3(body, "bingham::Filter::log_likelihood_vector"),
+                                     impl::to_array3(reference, "bingham::Filter::log_likelihood_vector"), kappa);
+    }
+    /// Eigen vectors are refused for measurements and increments at compile time: pass an
+    /// Eigen::Quaterniond (d = 4) or std::complex<double> (d = 2). (A Vector4d from
+    /// Quaterniond::coeffs() is in (x, y, z, w) order and would be silently wrong.)
+    template <class D>
+    void update(const Eigen::MatrixBase<D> &, const Distribution &) {
+        static_assert(sizeof(D) == 0, "bingham::Filter::update: pass an Eigen::Quaterniond (or bingham::Quaternion), "
+                                      "not an Eigen vector: coeffs() is (x, y, z, w), the library is (w, x, y, z)");
+    }
+    template <class D>
+    void predict_rotation(const Eigen::MatrixBase<D> &, const Distribution &) {
+        static_assert(sizeof(D) == 0, "bingham::Filter::predict_rotation: pass an Eigen::Quaterniond (or "
+                                      "bingham::Quaternion), not an Eigen vector: coeffs() is (x, y, z, w)");
+    }
+#endif
+
+private:
+    Filter(bingham_filter *f, std::size_t d) : f_(f), d_(d) {}
+    void predict_rotation_raw(const std::vector<double> &u, const Distribution &noise) {
+        check_noise(noise, "bingham::Filter::predict_rotation");
+        detail::require_dim(u.size() == d_, "bingham::Filter::predict_rotation", "u must have d entries");
+        detail::check(bingham_filter_predict_rotation(f_, u.data(), noise.M.data(), noise.z.data()));
+    }
+    void update_raw(const std::vector<double> &measurement, const Distribution &noise) {
+        check_noise(noise, "bingham::Filter::update");
+        detail::require_dim(measurement.size() == d_, "bingham::Filter::update", "the measurement must have d entries");
+        detail::check(bingham_filter_update(f_, measurement.data(), noise.M.data(), noise.z.data()));
+    }
+    double log_likelihood_raw(const std::vector<double> &measurement, const Distribution &noise) const {
+        check_noise(noise, "bingham::Filter::log_likelihood");
+        detail::require_dim(measurement.size() == d_, "bingham::Filter::log_likelihood",
+                            "the measurement must have d entries");
+        double out = 0;
+        detail::check(bingham_filter_log_likelihood(f_, measurement.data(), noise.M.data(), noise.z.data(), &out));
+        return out;
+    }
+    void require(const char *where) const {
+        detail::require(f_ != nullptr, BINGHAM_ERR_NULL_ARGUMENT, where, "empty (moved-from) filter");
+    }
+    void check_noise(const Distribution &noise, const char *where) const {
+        require(where);
+        noise.validate(where);
+        detail::require_dim(noise.d == d_, where, "the distribution's d differs from the filter's");
+    }
+    static std::vector<double> vec(const Quaternion &q) { return {q.w, q.x, q.y, q.z}; }
+    static std::vector<double> vec(std::complex<double> c) { return {c.real(), c.imag()}; }
+
+    bingham_filter *f_ = nullptr;
+    std::size_t d_ = 0;
+};
+
+// ---- the AHRS --------------------------------------------------------------------------------
+
+/// The AHRS parameters (the C struct; angles rad, times s). Start from ahrs_default_params().
+using AhrsParams = bingham_ahrs_params;
+
+/// The tuned default parameters for the sampling period `sample_time` (seconds).
+inline AhrsParams ahrs_default_params(double sample_time) {
+    AhrsParams p{};
+    detail::check(bingham_ahrs_params_default(sample_time, &p));
+    return p;
+}
+
+/// An IMU attitude and heading reference system on the Bingham filter. Owns a `bingham_ahrs *`;
+/// move-only, copy with clone(). The orientation maps sensor to world ENU (x east, y north,
+/// z up); gyroscope rad/s, accelerometer m/s^2 (+g up at rest), magnetometer any unit.
+/// A moved-from Ahrs is empty: its methods throw Error(BINGHAM_ERR_NULL_ARGUMENT).
+class Ahrs {
+public:
+    /// With the default parameters for the sampling period `sample_time` (s).
+    explicit Ahrs(double sample_time) : Ahrs(ahrs_default_params(sample_time)) {}
+    /// With the given parameters (validated by the library; the message names a bad field).
+    explicit Ahrs(const AhrsParams &params) { detail::check(bingham_ahrs_new(&params, &a_)); }
+    ~Ahrs() { bingham_ahrs_free(a_); }
+    Ahrs(Ahrs &&o) noexcept : a_(std::exchange(o.a_, nullptr)) {}
+    Ahrs &operator=(Ahrs &&o) noexcept {
+        if (this != &o) {
+            bingham_ahrs_free(a_);
+            a_ = std::exchange(o.a_, nullptr);
+        }
+        return *this;
+    }
+    Ahrs(const Ahrs &) = delete;
+    Ahrs &operator=(const Ahrs &) = delete;
+
+    /// An independent copy (state, bias, disturbance tracking).
+    Ahrs clone() const {
+        require("bingham::Ahrs::clone");
+        bingham_ahrs *c = nullptr;
+        detail::check(bingham_ahrs_clone(a_, &c));
+        return Ahrs(Adopt{}, c);
+    }
+    explicit operator bool() const noexcept { return a_ != nullptr; }
+    bingham_ahrs *get() noexcept { return a_; }
+    const bingham_ahrs *get() const noexcept { return a_; }
+
+    /// One sample without magnetometer (6-D: heading unobserved).
+    void update(const std::array<double, 3> &gyr, const std::array<double, 3> &acc) {
+        require("bingham::Ahrs::update");
+        detail::check(bingham_ahrs_update(a_, gyr.data(), acc.data(), nullptr));
+    }
+    /// One sample with magnetometer.
+    void update(const std::array<double, 3> &gyr, const std::array<double, 3> &acc, const std::array<double, 3> &mag) {
+        require("bingham::Ahrs::update");
+        detail::check(bingham_ahrs_update(a_, gyr.data(), acc.data(), mag.data()));
+    }
+    /// n samples (gyr, acc, mag: n x 3 row-major; mag empty for none): returns the n x 4
+    /// quaternions (w, x, y, z per row). A refused sample throws; the samples before it have
+    /// been processed (as in the C API).
+    std::vector<double> update_batch(const std::vector<double> &gyr, const std::vector<double> &acc,
+                                     const std::vector<double> &mag = {}) {
+        require("bingham::Ahrs::update_batch");
+        const std::size_t n = gyr.size() / 3;
+        detail::require_dim(gyr.size() == 3 * n && acc.size() == 3 * n && (mag.empty() || mag.size() == 3 * n),
+                            "bingham::Ahrs::update_batch", "gyr, acc (and mag) must all be n x 3");
+        std::vector<double> q(4 * n);
+        if (n == 0) return q;
+        detail::check(
+            bingham_ahrs_update_batch(a_, n, gyr.data(), acc.data(), mag.empty() ? nullptr : mag.data(), q.data()));
+        return q;
+    }
+    /// The orientation estimate (sensor -> world ENU, w >= 0).
+    Quaternion quaternion() const {
+        require("bingham::Ahrs::quaternion");
+        double q[4];
+        detail::check(bingham_ahrs_quaternion(a_, q));
+        return Quaternion::from_array(q);
+    }
+    /// The Bingham state of the orientation (d = 4).
+    Distribution state() const {
+        require("bingham::Ahrs::state");
+        Distribution r;
+        r.d = 4;
+        r.M.resize(16);
+        r.z.resize(4);
+        detail::check(bingham_ahrs_state(a_, r.M.data(), r.z.data()));
+        return r;
+    }
+    /// Replaces the orientation estimate (bias and low-pass filters are kept).
+    void set_state(const Distribution &s) {
+        require("bingham::Ahrs::set_state");
+        s.validate("bingham::Ahrs::set_state");
+        detail::require_dim(s.d == 4, "bingham::Ahrs::set_state", "needs d = 4");
+        detail::check(bingham_ahrs_set_state(a_, s.M.data(), s.z.data()));
+    }
+    /// The angular spread (rad): three principal directions, then the total.
+    std::array<double, 4> angular_spread() const {
+        require("bingham::Ahrs::angular_spread");
+        std::array<double, 4> s{};
+        detail::check(bingham_ahrs_angular_spread(a_, s.data()));
+        return s;
+    }
+    /// The total angular spread (rad), ~ the RMS orientation error when calibrated.
+    double uncertainty() const { return angular_spread()[3]; }
+    /// The gyroscope bias estimate (rad/s, sensor frame).
+    std::array<double, 3> gyro_bias() const {
+        require("bingham::Ahrs::gyro_bias");
+        std::array<double, 3> b{};
+        detail::check(bingham_ahrs_gyro_bias(a_, b.data()));
+        return b;
+    }
+
+#if BINGHAM_HPP_EIGEN
+    /// update() with Eigen 3-vectors.
+    template <class DG, class DA>
+    void update(const Eigen::MatrixBase<DG> &gyr, const Eigen::MatrixBase<DA> &acc) {
+        update(impl::to_array3(gyr, "bingham::Ahrs::update"), impl::to_array3(acc, "bingham::Ahrs::update"));
+    }
+    template <class DG, class DA, class DM>
+    void update(const Eigen::MatrixBase<DG> &gyr, const Eigen::MatrixBase<DA> &acc, const Eigen::MatrixBase<DM> &mag) {
+        update(impl::to_array3(gyr, "bingham::Ahrs::update"), impl::to_array3(acc, "bingham::Ahrs::update"),
+               impl::to_array3(mag, "bingham::Ahrs::update"));
+    }
+    /// The gyroscope bias as an Eigen vector.
+    Eigen::Vector3d gyro_bias_vector() const {
+        const auto b = gyro_bias();
+        return {b[0], b[1], b[2]};
+    }
+#endif
+
+private:
+    struct Adopt {};
+    Ahrs(Adopt, bingham_ahrs *a) : a_(a) {}
+    void require(const char *where) const {
+        detail::require(a_ != nullptr, BINGHAM_ERR_NULL_ARGUMENT, where, "empty (moved-from) AHRS");
+    }
+    bingham_ahrs *a_ = nullptr;
+};
+
+}  // inline namespace
+}  // namespace bingham
+
+#endif  // BINGHAM_HPP
