@@ -52,7 +52,7 @@
 /**
  * Minor version of the header.
  */
-#define BINGHAM_VERSION_MINOR 1
+#define BINGHAM_VERSION_MINOR 2
 
 /**
  * Patch version of the header.
@@ -293,7 +293,7 @@ extern "C" {
 #endif // __cplusplus
 
 /**
- * The library version as `"MAJOR.MINOR.PATCH"`, e.g. `"0.1.0"`: the version of the library
+ * The library version as `"MAJOR.MINOR.PATCH"`, e.g. `"0.2.0"`: the version of the library
  * actually loaded, to compare with the `BINGHAM_VERSION_*` macros of the header compiled in.
  *
  * Never returns `NULL`. The string is static: do not free or modify it. Thread-safe.

@@ -6,7 +6,7 @@ use std::os::raw::c_char;
 /// header/library mismatch.
 pub const BINGHAM_VERSION_MAJOR: u32 = 0;
 /// Minor version of the header.
-pub const BINGHAM_VERSION_MINOR: u32 = 1;
+pub const BINGHAM_VERSION_MINOR: u32 = 2;
 /// Patch version of the header.
 pub const BINGHAM_VERSION_PATCH: u32 = 0;
 
@@ -22,7 +22,7 @@ pub const BINGHAM_UNIT_TOL: f64 = 1e-6;
 
 static VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "\0");
 
-/// The library version as `"MAJOR.MINOR.PATCH"`, e.g. `"0.1.0"`: the version of the library
+/// The library version as `"MAJOR.MINOR.PATCH"`, e.g. `"0.2.0"`: the version of the library
 /// actually loaded, to compare with the `BINGHAM_VERSION_*` macros of the header compiled in.
 ///
 /// Never returns `NULL`. The string is static: do not free or modify it. Thread-safe.
