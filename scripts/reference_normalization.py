@@ -31,6 +31,9 @@ d = 5, 6, mpmath.diff of log F, F(0) = |S^{d-1}|, Σω = 1, ΣH_ij = 0 (rows), p
 shift identities.
 
 Usage: python3 scripts/reference_normalization.py [--quick] [--workers N]
+       python3 scripts/reference_normalization.py --extreme [--quick]
+       (only tests/data/normalization_extreme.csv: d = 2, 3, 4 at |z| = 1e10, 1e100, 1e300,
+       log F and ω, checked against Talbot (1e10) or the factorized asymptote (≥ 1e100); ~25 s)
 (full run: ~22 min wall with 2 workers on the 2-core dev VM while it was shared with builds;
 ~2500 s CPU in total.)
 Requires only mpmath (pip install mpmath) and the standard library.
@@ -68,7 +71,10 @@ def besseli012e(x):
     in self_test_bessel().  The guard bits keep combinations like 3I0 - 4I1 + I2
     (~1/x² relative at large x) accurate.
     """
-    wp = mp.prec + 60
+    # 2 log2(x) more bits for large x: the combinations I0 - I1 (~I0/(2x)) and 3I0 - 4I1 + I2
+    # (~I0/x²) are formed by subtraction and must keep mp.prec + 60 bits (x up to 1e308 for
+    # the --extreme rows).
+    wp = mp.prec + 60 + (2 * int(mp.log(mpf(x), 2)) if x > 1 else 0)
     with mp.workprec(wp):
         x = mpf(x)
         if x == 0:
@@ -206,19 +212,26 @@ class Integrator:
         return [h * y for y in acc]
 
     @staticmethod
-    def _grade(eps, ratio):
+    def _grade(eps, ratio, top=None):
+        """Breakpoints 0, eps, eps·ratio, … up to 1/2; with `top` (< 1/2) the grading stops
+        at `top` and one panel [top, 1/2] follows (for the --extreme rows: beyond `top` the
+        integrand is below e^{-K} of the total, see extreme_tops)."""
+        half = mpf(1) / 2
+        stop = half / 1.5 if top is None else min(mpf(top), half / 1.5)
         bps = [mpf(0)]
         p = mpf(eps)
-        while p < mpf(1) / 2 / 1.5:
+        while p < stop:
             bps.append(p)
             p *= ratio
-        bps.append(mpf(1) / 2)
+        if top is not None and stop < half / 1.5:
+            bps.append(stop)
+        bps.append(half)
         return bps
 
-    def integrate(self, f, eps_left, eps_right, adaptive=True):
+    def integrate(self, f, eps_left, eps_right, adaptive=True, tops=(None, None)):
         panels = []
         for side, eps in ((0, eps_left), (1, eps_right)):
-            bps = self._grade(eps, self.ratio)
+            bps = self._grade(eps, self.ratio, tops[side])
             for a, b in zip(bps[:-1], bps[1:]):
                 panels.append((a, b, side))
         ests = [self._gl(f, a, b, s) for (a, b, s) in panels]
@@ -341,7 +354,7 @@ def scale_of(z):
     return max([abs(a - b) for a in zs for b in zs] + [mpf(1)])
 
 
-def quad_d3(z, run, want4=True, adaptive=True, tol=None):
+def quad_d3(z, run, want4=True, adaptive=True, tol=None, tops=(None, None)):
     """F = 2π ∫_{-1}^{1} exp(z1 t²) · [circle of radius² 1-t² in (x2, x3)] dt (even in t)."""
     z1, z2, z3 = (mpf(v) for v in z)
     S = scale_of(z)
@@ -358,11 +371,11 @@ def quad_d3(z, run, want4=True, adaptive=True, tol=None):
     integ = Integrator(run["n"], run["ratio"], tol if tol is not None else mpf(10) ** (3 - run["dps"]))
     eps0 = run["offset"] / (4 * mp.sqrt(big))
     eps1 = run["offset"] / (8 * S)
-    vec = integ.integrate(f, min(eps0, mpf(1) / 8), min(eps1, mpf(1) / 8), adaptive)
+    vec = integ.integrate(f, min(eps0, mpf(1) / 8), min(eps1, mpf(1) / 8), adaptive, tops)
     return finish(3, vec, mp.log(4 * mp.pi), want4), integ.evals
 
 
-def quad_d4(z, run, want4=True, adaptive=True, tol=None):
+def quad_d4(z, run, want4=True, adaptive=True, tol=None, tops=(None, None)):
     """F = 2π² ∫_0^1 [circle radius² u in (x1,x2)] · [circle radius² 1-u in (x3,x4)] du."""
     z1, z2, z3, z4 = (mpf(v) for v in z)
     S = scale_of(z)
@@ -375,7 +388,7 @@ def quad_d4(z, run, want4=True, adaptive=True, tol=None):
 
     integ = Integrator(run["n"], run["ratio"], tol if tol is not None else mpf(10) ** (3 - run["dps"]))
     eps = min(run["offset"] / (4 * S), mpf(1) / 8)
-    vec = integ.integrate(f, eps, eps, adaptive)
+    vec = integ.integrate(f, eps, eps, adaptive, tops)
     return finish(4, vec, mp.log(2 * mp.pi ** 2), want4), integ.evals
 
 
@@ -882,6 +895,8 @@ def main():
     ap.add_argument("--quick", action="store_true", help="a few rows per d, no files written")
     ap.add_argument("--dims", default="2,3,4,5,6,7,8")
     ap.add_argument("--skip-extra", action="store_true")
+    ap.add_argument("--extreme", action="store_true",
+                    help="only the |z| = 1e10, 1e100, 1e300 rows (normalization_extreme.csv)")
     args = ap.parse_args()
 
     t_start = time.time()
@@ -892,6 +907,9 @@ def main():
     mp.dps = RUN_A["dps"]
     w = self_test_bessel()
     log("Bessel I0e/I1e/I2e (and I0-I1, 3I0-4I1+I2, I0-I2) vs mpmath.besseli: max error %s ulp(dps)" % mp.nstr(w, 2))
+    if args.extreme:
+        main_extreme(args, log)
+        return
 
     rng = random.Random(20240607)
     dims = [int(x) for x in args.dims.split(",")]
@@ -996,6 +1014,157 @@ def main():
         log("wrote %s (%d rows; %d near-zero H entries written as 0)"
             % (os.path.relpath(path), len(rows), nzero.get(d, 0)))
     log("done in %.1f s" % (time.time() - t_start))
+
+
+# ----------------------------------------------------------------------------------------
+# --extreme: |z| = 1e10, 1e100, 1e300 for d = 2, 3, 4 (tests/data/normalization_extreme.csv)
+# ----------------------------------------------------------------------------------------
+
+def grid_extreme():
+    """Rows with concentrations of magnitude M = 1e10, 1e100, 1e300 (z ascending, z_d = 0).
+
+    Chosen so that the graded quadrature needs few panels: every row's integrand decays like
+    e^{-|z|·u} away from the layers (see extreme_tops), except (-1e10, -1, -1, 0), whose right
+    half is kept in full."""
+    rows = []
+    for M in (1e10, 1e100, 1e300):
+        rows += [
+            (2, (-M, 0.0)), (2, (-0.37 * M, 0.0)),
+            (3, (-M, -M, 0.0)), (3, (-M, -0.5 * M, 0.0)), (3, (-M, -1e-3 * M, 0.0)),
+            (3, (-M, -1.0, 0.0)), (3, (-M, 0.0, 0.0)),
+            (4, (-M, -M, -M, 0.0)), (4, (-M, -0.1 * M, -0.01 * M, 0.0)),
+            (4, (-M, -0.5 * M, 0.0, 0.0)), (4, (-M, -M, -1.0, 0.0)),
+            (4, (-M, -0.3 * M, -2.5, 0.0)),
+        ]
+    rows.append((4, (-1e10, -1.0, -1.0, 0.0)))
+    return rows
+
+
+def extreme_tops(d, z, dps):
+    """Where each half's grading may stop: beyond `top` the integrand is below e^{-K} times
+    its peak, with K = (dps + 10) ln 10 + 2 ln(S + 1) + 50 (S = the largest |z_i - z_j|; the
+    total is at least ~S^{-2} of the peak). d = 3 (variable t, factor e^{z1 t²}): left top
+    √(K/|z1|); the right half (t ≥ 1/2, factor ≤ e^{z1/4}) needs no grading if |z1|/4 > K.
+    d = 4 (variable u, factor e^{u z2}): left top K/|z2|; the right half (≤ e^{z2/2}) needs no
+    grading if |z2|/2 > K. One panel [top, 1/2] still covers the rest."""
+    K = (dps + 10) * mp.log(10) + 2 * mp.log(scale_of(z) + 1) + 50
+    if d == 3:
+        a = abs(mpf(z[0]))
+        left = mp.sqrt(K / a) if a > 0 and K / a < mpf(1) / 16 else None
+        right = mpf(0) if a / 4 > K else None
+    else:
+        a = abs(mpf(z[1]))
+        left = K / a if a > 0 and K / a < mpf(1) / 4 else None
+        right = mpf(0) if a / 2 > K else None
+    return (left, right)
+
+
+def compute_extreme(d, z, run):
+    with mp.workdps(run["dps"]):
+        if d == 2:
+            # the closed form with the script's scaled Bessel functions (Hankel expansion at
+            # large x): log F = log 2π + log(I0e(x)) + (z1/2 + x), x = -z1/2
+            z1 = mpf(z[0])
+            x = -z1 / 2
+            i0, i1, i2 = besseli012e(x)
+            logF = mp.log(2 * mp.pi) + mp.log(i0) + (z1 / 2 + x)   # (z1/2 + x = 0 exactly)
+            with mp.workprec(mp.prec + 60):
+                om = [(i0 - i1) / (2 * i0), (i0 + i1) / (2 * i0)]
+            res, ev = (logF, om, None), 0
+        elif d == 3:
+            res, ev = quad_d3(z, run, want4=False, tops=extreme_tops(d, z, run["dps"]))
+        else:
+            res, ev = quad_d4(z, run, want4=False, tops=extreme_tops(d, z, run["dps"]))
+        logF, om, _ = res
+        return (+logF, [+o for o in om], None), ev
+
+
+def factorized_asymptote(z, dps):
+    """Independent check for rows whose entries are either huge (|z_i| ≥ 1e50) or moderate:
+    the huge coordinates are Gaussian, F_d(z) = Π_huge √(π/|z_i|) · F_k(z_rest) with a relative
+    correction O(max|z_rest| / min|z_huge|) ≤ 1e-40 here, and ω_i = 1/(2|z_i|) for the huge
+    ones (F_1 = 2; F_2 by mpmath.besseli; F_3 by the quadrature at moderate z)."""
+    with mp.workdps(dps):
+        huge = [mpf(v) for v in z if abs(v) >= 1e50]
+        rest = [v for v in z if abs(v) < 1e50]
+        k = len(rest)
+        if k == 1:
+            lr, orest = mp.log(2), [mpf(1)]
+        elif k == 2:
+            lr, orest, _ = closed_d2(rest)
+        else:
+            (lr, orest, _), _ = quad_d3(rest, RUN_A, want4=False)
+        logF = lr + sum(mp.log(mp.pi / abs(v)) / 2 for v in huge)
+        om = []
+        it = iter(orest)
+        for v in z:
+            om.append(1 / (2 * abs(mpf(v))) if abs(v) >= 1e50 else next(it))
+        return logF, om, None
+
+
+def task_extreme(args):
+    d, z = args
+    t0 = time.time()
+    A, evA = compute_extreme(d, z, RUN_A)
+    B, evB = compute_extreme(d, z, RUN_B)
+    extra = {}
+    M = max(abs(v) for v in z)
+    if M <= 1e10:
+        with mp.workdps(RUN_A["dps"]):
+            extra["talbot"] = talbot(z, RUN_A["dps"], want4=False)
+    else:
+        extra["asymptote"] = factorized_asymptote(z, RUN_A["dps"])
+    return d, z, A, B, extra, evA, evB, time.time() - t0
+
+
+def main_extreme(args, log):
+    tasks = grid_extreme()
+    if args.quick:
+        tasks = [tasks[0], tasks[7], tasks[-2]]
+    results = {}
+    with multiprocessing.Pool(args.workers) as pool:
+        for r in pool.imap_unordered(task_extreme, tasks, chunksize=1):
+            d, z, A, B, extra, evA, evB, dt = r
+            results[(d, z)] = r
+            log("d=%d z=%s: %.1f s, nodes A %d B %d" % (d, z, dt, evA, evB))
+    ok = True
+    worst = {}
+    mp.dps = RUN_A["dps"]
+    for (d, z) in tasks:
+        _, _, A, B, extra, _, _, _ = results[(d, z)]
+        with mp.workdps(RUN_B["dps"] + 20):
+            disc = _compare(d, A, B)
+            assert abs(mp.fsum(B[1]) - 1) < mpf(10) ** -35, ("sum omega", d, z)
+            assert all(o > 0 for o in B[1])
+            for key in ("talbot", "asymptote"):
+                if key in extra:
+                    c = _compare(d, A, extra[key])
+                    worst[key] = max(worst.get(key, mpf(0)), c["dlogF"], c["omega"])
+                    if max(c["dlogF"], c["omega"]) > mpf(10) ** -25:
+                        ok = False
+                        log("ERROR: %s disagrees at d=%d z=%s: %s" % (key, d, z, c))
+        for k, v in disc.items():
+            worst["AB " + k] = max(worst.get("AB " + k, mpf(0)), v)
+            if v > MAX_DISCREPANCY:
+                ok = False
+                log("ERROR: run A vs B %s = %s at d=%d z=%s" % (k, mp.nstr(v, 3), d, z))
+    for k, v in sorted(worst.items()):
+        log("max %s: %s" % (k, mp.nstr(v, 2)))
+    if not ok:
+        log("REFUSING to write the data: checks failed")
+        sys.exit(1)
+    if args.quick:
+        log("quick mode: no files written")
+        return
+    path = os.path.join(OUTDIR, "normalization_extreme.csv")
+    with open(path, "w") as fh:
+        fh.write("# d,z1..zd,logF,omega1..omegad (variable length: d = 2, 3, 4); written by\n"
+                 "# scripts/reference_normalization.py --extreme (run B, 65 digits; see tests/data/README.md)\n")
+        for (d, z) in tasks:
+            logF, om, _ = results[(d, z)][3]
+            vals = [str(d)] + [repr(float(v)) for v in z] + [fmt(logF)] + [fmt(o) for o in om]
+            fh.write(",".join(vals) + "\n")
+    log("wrote %s (%d rows)" % (os.path.relpath(path), len(tasks)))
 
 
 def run_extra_checks_wrapper():

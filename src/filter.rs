@@ -287,7 +287,8 @@ struct Noise<const D: usize> {
     z: [f64; D],
     /// Process noise: the second moment (of the capped concentrations). Measurement noise: unused.
     moment: Mat<D>,
-    /// Measurement noise: `log F(z)`. Process noise: unused.
+    /// Measurement noise: `log F(z)` (NaN if it could not be evaluated: only
+    /// `log_likelihood` needs it, the update does not). Process noise: unused.
     log_f: f64,
 }
 
@@ -346,7 +347,11 @@ impl<const D: usize> NoiseCache<D> {
                 let (_, w) = fixed::log_f_omega(&capped(&zz))?;
                 (fixed::congruence(&mm, &w), 0.0)
             }
-            Role::Measurement => (fixed::zeros::<D>(), fixed::log_f_omega(&zz)?.0),
+            // The Bayes product does not need log F: an update must not fail on it.
+            Role::Measurement => (
+                fixed::zeros::<D>(),
+                fixed::log_f_omega(&zz).map_or(f64::NAN, |r| r.0),
+            ),
         };
         Ok(Noise {
             m: mm,
@@ -495,6 +500,11 @@ impl<const D: usize> Core<D> {
                 &built
             }
         };
+        if !noise.log_f.is_finite() {
+            return Err(Error::Numerical(
+                "log-likelihood: log F of the measurement noise is not finite".into(),
+            ));
+        }
         let ml = Self::likelihood_m(&zhat, &noise.m);
         let p = fixed::congruence(&ml, &noise.z);
         let value = self.log_likelihood_precision(&p)? - noise.log_f;

@@ -187,6 +187,56 @@ pub fn i01e(x: f64) -> (f64, f64, f64) {
     (i0, i1.copysign(x), d)
 }
 
+/// `(k·i0e(x), k·i1e(x), k·(i0e − i1e)(x), k·x·(i0e − i1e)(x))` for `x ≥ 0` and a scale `k > 0`,
+/// without intermediate underflow: for `x ≥ 128` the factor `k·x^{−1/2}` is formed first, so
+/// with `k ≈ √x` every output is O(1) except `k·(i0e − i1e) ≈ 1/(2x)` (representable for all
+/// finite `x`). The normalization constant's scaled quadrature and the d = 2 closed form use it
+/// for arguments up to the largest double, where `i0e − i1e ≈ x^{−3/2}/5` underflows.
+/// For `x < 128` the results are those of [`i01e`] times `k`.
+#[inline(always)]
+pub(crate) fn i01e_times(x: f64, k: f64) -> (f64, f64, f64, f64) {
+    if x < X_ASY {
+        let (i0, i1, d) = i01e_nonneg(x);
+        let kd = k * d;
+        (k * i0, k * i1, kd, kd * x)
+    } else {
+        let s = 1.0 / x;
+        let ku = k * s.sqrt();
+        let g = estrin2(&ASY_TAIL, s);
+        let a = ASY_I0_LO + s * g[0];
+        let b = ASY_D_HI + (ASY_D_LO + s * g[1]);
+        let sb = s * b;
+        (
+            ku * (ASY_I0_HI + a),
+            ku * (ASY_I0_HI + (a - sb)),
+            ku * sb,
+            ku * b,
+        )
+    }
+}
+
+/// `(k·Q(x), k·x²·Q(x))` (see [`bessel_q`]) for `x ≥ 0` and a scale `k > 0`, formed like
+/// [`i01e_times`] so that `k·x²·Q ≈ 0.6·k/√x` never underflows when it is representable.
+#[inline(always)]
+pub(crate) fn bessel_q_times(x: f64, k: f64) -> (f64, f64) {
+    if x < X_ASY {
+        let kq = k * bessel_q(x);
+        (kq, kq * x * x)
+    } else {
+        let s = 1.0 / x;
+        let ku = k * s.sqrt();
+        let b = ASY_Q_HI + (ASY_Q_LO + s * estrin(&ASY_Q_TAIL, s));
+        let kub = ku * b;
+        (kub * s * s, kub)
+    }
+}
+
+/// The largest power of two `≤ x` for `x ≥ 1` finite (an exact scale factor).
+#[inline(always)]
+pub(crate) fn pow2_floor(x: f64) -> f64 {
+    f64::from_bits(x.to_bits() & 0xfff0_0000_0000_0000)
+}
+
 /// `Q(x) = e^{-x} (3 I0(x) − 4 I1(x) + I2(x))` for `x ≥ 0` (negative `x` is taken as `|x|`).
 ///
 /// Equals `4 (i0e − i1e) − 2 i1e / x`. `Q(0) = 3`, and `Q(x) ≈ (3/2) (2πx)^{-1/2} x^{-2}` for

@@ -6,9 +6,33 @@
 //! Second derivatives: `∂²F/∂z1² = F·E[x1⁴]` with `E[x1⁴] = Q(x)/(8 I0e)`,
 //! `Q = e^{−x}(3I0 − 4I1 + I2)` (evaluated without cancellation); the rest of the Hessian of
 //! `log F` follows from `ω1 + ω2 = 1`.
+//!
+//! Range: every Bessel value is taken times the exact factor `k = 2^⌊log2 √x⌋`
+//! ([`crate::special::i01e_times`]), which keeps `I0e − I1e ≈ x^{−3/2}/5` and `Q ≈ x^{−5/2}` from
+//! underflowing; `ω1 ≈ 1/(4x)` keeps its relative accuracy for every finite `z1`, and `H` until
+//! it drops below the smallest double (`|z1| ≳ 1e154`). For `x ≤ 1` (`k = 1`) and for `x < 128`
+//! (`k` a power of two) the results are bit-for-bit those of the unscaled formulas.
 
 use crate::error::Result;
-use crate::special::{bessel_q, i01e};
+use crate::special::{bessel_q_times, i01e_times, pow2_floor};
+
+/// `(i0e, ω1, ω2, E[x1⁴])` at `x = −z1/2 ≥ 0`, every value formed from Bessel functions
+/// scaled by `k = 2^⌊log2 √x⌋` (an exact factor), so that nothing underflows for any finite
+/// `x`: `i0e ≈ (2πx)^{−1/2}` and `ω1 ≈ 1/(4x)` are representable down to the smallest
+/// `x^{−1}`, but `i0e − i1e ≈ x^{−3/2}/5` is not.
+#[inline(always)]
+fn scaled(x: f64, fourth: bool) -> (f64, f64, f64, f64) {
+    let k = if x > 1.0 { pow2_floor(x.sqrt()) } else { 1.0 };
+    let (ki0, ki1, kdm, _) = i01e_times(x, k);
+    let w1 = kdm / (2.0 * ki0);
+    let w2 = (ki0 + ki1) / (2.0 * ki0);
+    let e11 = if fourth {
+        bessel_q_times(x, k).0 / (8.0 * ki0)
+    } else {
+        0.0
+    };
+    (ki0 / k, w1, w2, e11)
+}
 
 /// Sorted evaluation (see `SortedEval`): `z = [z1, 0]`, `z1 ≤ 0`.
 pub(crate) fn log_f_sorted(
@@ -17,10 +41,8 @@ pub(crate) fn log_f_sorted(
     hess: Option<&mut [f64]>,
 ) -> Result<f64> {
     let x = -0.5 * z[0];
-    let (i0, i1, dm) = i01e(x);
+    let (i0, w1, w2, e11) = scaled(x, hess.is_some());
     let log_f = (2.0 * std::f64::consts::PI).ln() + i0.ln();
-    let w1 = dm / (2.0 * i0);
-    let w2 = (i0 + i1) / (2.0 * i0);
     if let Some(g) = grad {
         g[0] = w1;
         g[1] = w2;
@@ -29,7 +51,6 @@ pub(crate) fn log_f_sorted(
         // H11 = E[x1⁴] − ω1² (no cancellation: E[x1⁴] ≈ 3ω1² when concentrated); since
         // ω1 + ω2 = 1 the other entries follow: H12 = H21 = −H11, H22 = H11 (computing
         // E[x2⁴] − ω2² directly would cancel catastrophically when x2² ≈ 1).
-        let e11 = bessel_q(x) / (8.0 * i0);
         let h11 = e11 - w1 * w1;
         h[0] = h11;
         h[1] = -h11;
@@ -43,8 +64,6 @@ pub(crate) fn log_f_sorted(
 /// [`log_f_sorted`], without its output slices; the MLE's start solves many d = 2 problems).
 #[inline]
 pub(crate) fn omega1_with_slope(z1: f64) -> (f64, f64) {
-    let x = -0.5 * z1;
-    let (i0, _, dm) = i01e(x);
-    let w1 = dm / (2.0 * i0);
-    (w1, bessel_q(x) / (8.0 * i0) - w1 * w1)
+    let (_, w1, _, e11) = scaled(-0.5 * z1, true);
+    (w1, e11 - w1 * w1)
 }

@@ -94,6 +94,15 @@ pub fn log_normalization_into(
     }
     zs[d - 1] = 0.0;
     let zs = &zs[..d];
+    // The shift z − max z overflows when the entries span more than the largest double
+    // (e.g. z = (MAX, −MAX)): refused, like the distribution constructors do.
+    if !zs[0].is_finite() {
+        return Err(Error::InvalidArgument(
+            "z: max z − min z overflows a double; the concentrations must span less than \
+             about 1.8e308"
+                .into(),
+        ));
+    }
     let eval = sorted_eval(d, method);
     let mut gs = [0.0f64; MAX_DIM];
     let want_grad = grad.is_some();
