@@ -23,6 +23,7 @@
 //! - `BINGHAM_FUZZ_REPRO=<label>:<seed>`: run that one case only, printing its inputs;
 //! - `BINGHAM_FUZZ_STATS=1`: print per-function status counts and timings.
 
+mod common;
 mod fuzz_common;
 
 use std::collections::BTreeMap;
@@ -2155,26 +2156,9 @@ fn fuzz_filter_sequences() {
 const SHARE_VECTOR: f64 = 0.06;
 const SHARE_AHRS: f64 = 0.05;
 
-/// `R(q) v` for a unit quaternion q (scalar first).
+/// `R(q) v` for a unit quaternion q (scalar first), with the tests' textbook `R(q)`.
 fn rotate(q: &[f64], v: &[f64]) -> [f64; 3] {
-    let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
-    let r = [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
-    ];
+    let r = common::rot(&[q[0], q[1], q[2], q[3]]);
     [0, 1, 2].map(|i| r[i][0] * v[0] + r[i][1] * v[1] + r[i][2] * v[2])
 }
 
