@@ -196,6 +196,36 @@ fn lp_coeff(dt: f64, tau: f64) -> f64 {
     1.0 - (-dt / tau).exp()
 }
 
+/// Time constant (s) of the low-pass filters of the rest detection.
+const REST_FILTER_TIME: f64 = 0.5;
+/// Time constant (s) with which a disturbed field's candidate reference follows it.
+const CANDIDATE_TIME: f64 = 1.0;
+
+/// The filter coefficients that follow from the parameters (computed once).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Coeffs {
+    rest_filter: f64,
+    rest_bias: f64,
+    mag_ref: f64,
+    candidate: f64,
+    acc: [f64; 5],
+    mag: [f64; 5],
+}
+
+impl Coeffs {
+    fn new(p: &AhrsParams) -> Coeffs {
+        let dt = p.sample_time;
+        Coeffs {
+            rest_filter: lp_coeff(dt, REST_FILTER_TIME),
+            rest_bias: lp_coeff(dt, p.rest_bias_time),
+            mag_ref: lp_coeff(dt, p.mag_ref_time),
+            candidate: lp_coeff(dt, CANDIDATE_TIME),
+            acc: butterworth(dt, p.acc_tau),
+            mag: butterworth(dt, p.mag_tau),
+        }
+    }
+}
+
 fn norm3(v: &[f64; 3]) -> f64 {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
 }
@@ -318,6 +348,7 @@ struct MagRef {
 #[derive(Debug, Clone)]
 pub struct Ahrs {
     params: AhrsParams,
+    coeffs: Coeffs,
     /// The process noise (row-major M, z), fixed for the AHRS's life.
     noise_m: [f64; 16],
     noise_z: [f64; 4],
@@ -342,8 +373,10 @@ impl Ahrs {
         noise_m.copy_from_slice(&noise.m_row_major());
         let mut noise_z = [0.0; 4];
         noise_z.copy_from_slice(noise.z().as_slice());
+        let coeffs = Coeffs::new(params);
         Ok(Ahrs {
             params: *params,
+            coeffs,
             noise_m,
             noise_z,
             filter: None,
@@ -352,10 +385,7 @@ impl Ahrs {
             acc_lp: [0.0; 3],
             rest_timer: 0.0,
             mag: None,
-            acc_filter: InertialLowPass::new(
-                butterworth(params.sample_time, params.acc_tau),
-                &[0.0; 3],
-            ),
+            acc_filter: InertialLowPass::new(coeffs.acc, &[0.0; 3]),
             mag_filter: None,
             samples: 0,
         })
@@ -478,12 +508,12 @@ impl Ahrs {
         let dt = p.sample_time;
 
         // 1. Rest detection and the bias at rest.
-        let (kg, ka) = (lp_coeff(dt, 0.5), lp_coeff(dt, 0.5));
+        let c = self.coeffs;
         let mut gyr_lp = self.gyr_lp;
         let mut acc_lp = self.acc_lp;
         for i in 0..3 {
-            gyr_lp[i] += kg * (gyr[i] - gyr_lp[i]);
-            acc_lp[i] += ka * (acc[i] - acc_lp[i]);
+            gyr_lp[i] += c.rest_filter * (gyr[i] - gyr_lp[i]);
+            acc_lp[i] += c.rest_filter * (acc[i] - acc_lp[i]);
         }
         let dg = norm3(&[gyr[0] - gyr_lp[0], gyr[1] - gyr_lp[1], gyr[2] - gyr_lp[2]]);
         let da = norm3(&[acc[0] - acc_lp[0], acc[1] - acc_lp[1], acc[2] - acc_lp[2]]);
@@ -491,9 +521,8 @@ impl Ahrs {
         let rest_timer = if still { self.rest_timer + dt } else { 0.0 };
         let mut bias = self.bias;
         if rest_timer >= p.rest_time {
-            let k = lp_coeff(dt, p.rest_bias_time);
             for i in 0..3 {
-                bias[i] += k * (gyr_lp[i] - bias[i]);
+                bias[i] += c.rest_bias * (gyr_lp[i] - bias[i]);
             }
         }
 
@@ -532,8 +561,7 @@ impl Ahrs {
         if let Some(m) = mag {
             let q = f.mode4()?;
             if let Some(kappa) = self.magnetic_weight(&q, m, &mut mag_ref) {
-                let mf = mag_filter
-                    .get_or_insert_with(|| InertialLowPass::new(butterworth(dt, p.mag_tau), m));
+                let mf = mag_filter.get_or_insert_with(|| InertialLowPass::new(c.mag, m));
                 mf.step(m);
                 let mw = q4::rotate(&q, &mf.y);
                 let h = (mw[0] * mw[0] + mw[1] * mw[1]).sqrt();
@@ -599,7 +627,7 @@ impl Ahrs {
         let disturbed = (norm - reference.norm).abs() > p.mag_norm_tol * reference.norm
             || (dip - reference.dip).abs() > p.mag_dip_tol;
         if !disturbed {
-            let k = lp_coeff(dt, p.mag_ref_time);
+            let k = self.coeffs.mag_ref;
             reference.norm += k * (norm - reference.norm);
             reference.dip += k * (dip - reference.dip);
             reference.cand_norm = norm;
@@ -611,7 +639,7 @@ impl Ahrs {
         let steady = (norm - reference.cand_norm).abs() <= p.mag_norm_tol * reference.cand_norm
             && (dip - reference.cand_dip).abs() <= p.mag_dip_tol;
         if steady {
-            let k = lp_coeff(dt, 1.0);
+            let k = self.coeffs.candidate;
             reference.cand_norm += k * (norm - reference.cand_norm);
             reference.cand_dip += k * (dip - reference.cand_dip);
             reference.cand_time += dt;
@@ -680,9 +708,8 @@ impl Ahrs {
         self.filter = Some(f);
         self.gyr_lp = *gyr;
         self.acc_lp = *acc;
-        self.acc_filter = InertialLowPass::new(butterworth(p.sample_time, p.acc_tau), acc);
-        self.mag_filter =
-            mag.map(|m| InertialLowPass::new(butterworth(p.sample_time, p.mag_tau), m));
+        self.acc_filter = InertialLowPass::new(self.coeffs.acc, acc);
+        self.mag_filter = mag.map(|m| InertialLowPass::new(self.coeffs.mag, m));
         self.mag = mag_ref;
         self.samples = 1;
         Ok(())
