@@ -207,9 +207,14 @@ impl Bingham {
 
     /// `log f(x)` for a unit vector `x` (length d, `|‖x‖ − 1| ≤ UNIT_TOL`; normalized first).
     pub fn log_pdf(&self, x: &[f64]) -> Result<f64> {
-        let lf = self.log_normalization()?;
+        self.log_pdf_given(x, self.log_normalization()?)
+    }
+
+    /// `log f(x)` with `log F` already known (`log_f` = [`Bingham::log_normalization`]): for
+    /// evaluating many points with one normalization.
+    pub fn log_pdf_given(&self, x: &[f64], log_f: f64) -> Result<f64> {
         let x = unit_vector("x", self.dim(), x)?;
-        Ok(self.exponent(&x) - lf)
+        Ok(self.exponent(&x) - log_f)
     }
 
     /// `f(x)`, see [`Bingham::log_pdf`].

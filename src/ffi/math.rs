@@ -472,7 +472,7 @@ unsafe fn pointwise(
     x: *const f64,
     p_name: &str,
     p: *mut f64,
-    f: impl Fn(&Bingham, &[f64]) -> crate::error::Result<f64>,
+    f: impl Fn(f64) -> f64,
 ) -> FfiResult<()> {
     dim(d)?;
     let nd = len2("x", n, d)?;
@@ -493,9 +493,13 @@ unsafe fn pointwise(
             format!("cannot allocate memory for n = {n} values"),
         )
     })?;
+    // One normalization for all points.
+    let log_f = if n > 0 { b.log_normalization()? } else { 0.0 };
     for (i, row) in xs.chunks_exact(d).enumerate() {
-        let v = f(&b, row).map_err(|e| Failure::from(e).context(format_args!("x row {i}")))?;
-        values.push(v);
+        let v = b
+            .log_pdf_given(row, log_f)
+            .map_err(|e| Failure::from(e).context(format_args!("x row {i}")))?;
+        values.push(f(v));
     }
     if n > 0 {
         // SAFETY: p checked non-NULL; n writable doubles.
@@ -530,7 +534,7 @@ pub unsafe extern "C" fn bingham_pdf(
 ) -> bingham_status {
     guard("bingham_pdf", || {
         // SAFETY: forwarded caller contract.
-        unsafe { pointwise(d, m, z, n, x, "p", p, |b, row| b.pdf(row)) }
+        unsafe { pointwise(d, m, z, n, x, "p", p, f64::exp) }
     })
 }
 
@@ -550,7 +554,7 @@ pub unsafe extern "C" fn bingham_log_pdf(
 ) -> bingham_status {
     guard("bingham_log_pdf", || {
         // SAFETY: forwarded caller contract.
-        unsafe { pointwise(d, m, z, n, x, "log_p", log_p, |b, row| b.log_pdf(row)) }
+        unsafe { pointwise(d, m, z, n, x, "log_p", log_p, |v| v) }
     })
 }
 
