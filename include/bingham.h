@@ -396,8 +396,9 @@ enum bingham_status bingham_log_normalization_constant(size_t d,
  * Wood (2005), as used by other Bingham libraries.
  *
  * Provided for comparison and for users who need agreement with those libraries; the relative
- * error of F is typically 1e-3 to 5e-2 and the gradient entries do not sum exactly to 1. Prefer
- * `bingham_log_normalization_constant()`, which is exact.
+ * error of F is up to several percent (measured in the repository's `docs/accuracy.md`) and the
+ * gradient entries do not sum exactly to 1. Prefer `bingham_log_normalization_constant()`, which
+ * is exact.
  *
  * Arguments, errors and safety as for `bingham_log_normalization_constant()`.
  *

@@ -1,19 +1,20 @@
 #!/usr/bin/env python3
 """Offline high-precision reference values of the Bingham normalization constant.
 
-Writes tests/data/normalization_d{d}.csv for d = 2..8 (see tests/data/README.md).
+Writes tests/data/normalization_d{d}.csv for d = 2..8 (and, with --extreme,
+tests/data/normalization_extreme.csv; see tests/data/README.md).
 
-Conventions (DESIGN.md §1): F(Z) = ∫_{S^{d-1}} exp(xᵀ Z x) dx with the SURFACE measure,
-Z = diag(z), z ascending, z_d = 0.  ω_i = ∂ log F/∂z_i = E[x_i²],
+Conventions (docs/design.md, § Conventions): F(Z) = ∫_{S^{d-1}} exp(xᵀ Z x) dx with the
+SURFACE measure, Z = diag(z), z ascending, z_d = 0.  ω_i = ∂ log F/∂z_i = E[x_i²],
 H_ij = ∂² log F/∂z_i∂z_j = E[x_i² x_j²] − ω_i ω_j.
 
 Methods
   d = 2     closed form with the modified Bessel functions I0, I1, I2 (mpmath.besseli).
-  d = 3, 4  the exact 1-D integrals of DESIGN.md §2 (a coordinate times a circle, two
-            circles), integrated for F, F·E[x_i²] and F·E[x_i²x_j²] at once with an adaptive
-            composite Gauss–Legendre rule on geometrically graded panels at both ends of the
-            interval (boundary layers of width ~1/|z|); Bessel functions in exponentially
-            scaled form.
+  d = 3, 4  the exact 1-D integrals of docs/design.md, § "d = 3, 4: one-dimensional Bessel
+            integrals" (a coordinate times a circle, two circles), integrated for F,
+            F·E[x_i²] and F·E[x_i²x_j²] at once with an adaptive composite Gauss–Legendre
+            rule on geometrically graded panels at both ends of the interval (boundary
+            layers of width ~1/|z|); Bessel functions in exponentially scaled form.
   d = 5..8  fixed-Talbot inversion of the Laplace transform of the (unnormalized) density of
             R = Σ λ_i y_i² (Kume & Wood 2005): F(Z) = 2 e^c π^{d/2} L⁻¹[Π(λ_i+s)^{-1/2}](1),
             λ_i = c − z_i; moments from the transforms of y_i² and y_i²y_j² weights,

@@ -343,7 +343,7 @@ struct MagRef {
 }
 
 /// The AHRS. Create it with [`Ahrs::new`], feed it samples with [`Ahrs::update`] (or
-/// [`Ahrs::update_batch`]), read [`Ahrs::quaternion`], [`Ahrs::state`] and
+/// [`Ahrs::update_batch`]), read [`Ahrs::quaternion`], [`Ahrs::state_into`] and
 /// [`Ahrs::angular_spread`]. `Send` and `Sync`; no global state.
 #[derive(Debug, Clone)]
 pub struct Ahrs {

@@ -27,11 +27,10 @@
 //!   cancel analytically, so the differences are computed without cancellation. 9, 10 and 11 terms
 //!   keep the truncation error below `3e-18` relative at `x = 128` for `I0`, `I0 − I1` and `Q`.
 //!
-//! Accuracy, measured against the 50-digit reference `tests/data/bessel_reference.csv` (11224
-//! points; see `tests/special.rs`): on `[0, 128)` all four functions are within 1 ulp of the
-//! correctly rounded value (max relative error 2.2e-16); beyond, where the roundings of `1/x` and of
-//! its square root enter, `i0e` is within 1 ulp, `i1e` within 2.6e-16, `i0e_minus_i1e` within
-//! 3.9e-16 and `bessel_q` within 3.4e-16 relative (at most 3 ulp). Only `+`, `−` and `×` are used
+//! Accuracy, measured against the 50-digit reference `tests/data/bessel_reference.csv`
+//! (`tests/special.rs`; figures in `docs/accuracy.md`, § "Bessel functions"): within 1 ulp of the
+//! correctly rounded value on `[0, 128)`; beyond, where the roundings of `1/x` and of its square
+//! root enter, within a few ulp. Only `+`, `−` and `×` are used
 //! (plus one division and one square root for `x ≥ 128`); no `mul_add`, which is a slow library
 //! call unless FMA is enabled at compile time.
 //!

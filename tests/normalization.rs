@@ -1,4 +1,4 @@
-//! The normalization constant against independent references: 40-digit values computed
+//! The normalization constant against independent references: 65-digit values computed
 //! offline (`scripts/reference_normalization.py`), brute-force sphere quadrature, and identities.
 
 mod common;

@@ -75,9 +75,9 @@ fn table(d: usize, zs: &[Vec<f64>]) -> Stats {
 }
 
 fn assert_approximate(st: &Stats) {
-    // Not exact: every grid point is off by more than 1e-5 (the smallest errors, 6e-5 for d = 6,
-    // are near the uniform distribution); not wildly wrong: below 10 % (the largest, 5.8 %, is
-    // d = 4, z = (−5, −5, −5, 0): moderate concentration around one direction).
+    // Not exact: every grid point is off by more than 1e-5 (the smallest errors are near the
+    // uniform distribution); not wildly wrong: below 10 % (the largest are at moderate
+    // concentration around one direction). Measured values: docs/accuracy.md.
     assert!(st.min_f > 1e-5, "suspiciously exact: {:e}", st.min_f);
     assert!(st.max_f < 1e-1, "too inaccurate: {:e}", st.max_f);
     assert!(st.max_w < 1e-1, "ω too inaccurate: {:e}", st.max_w);

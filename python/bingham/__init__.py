@@ -366,7 +366,7 @@ def log_normalization_constant(z: ArrayLike) -> Tuple[float, Array]:
 
 
 def log_normalization_constant_saddlepoint(z: ArrayLike) -> Tuple[float, Array]:
-    """APPROXIMATE ``(log F, d log F/dz)`` by the saddlepoint method (errors ~1e-3..5e-2)."""
+    """APPROXIMATE ``(log F, d log F/dz)`` by the saddlepoint method (errors up to several %)."""
     return _log_norm(lib().bingham_log_normalization_constant_saddlepoint, z)
 
 

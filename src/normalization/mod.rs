@@ -20,13 +20,13 @@ use crate::error::{check_dim, check_finite, Error, Result, MAX_DIM};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Method {
     /// Exact to near machine precision: closed form (d = 2), 1-D Bessel quadrature (d = 3, 4),
-    /// Laplace inversion along the steepest-descent contour (d ≥ 5). Measured against 65-digit
-    /// references: relative error of F ≤ 4e-15 and of each ω_i ≤ 4e-15 for |z| ≤ 1e6.
+    /// Laplace inversion along the steepest-descent contour (d ≥ 5); finite for every finite z.
+    /// Measured against 65-digit references, for |z| up to 1e300: see `docs/accuracy.md`.
     #[default]
     Exact,
     /// The third-order saddlepoint approximation of Kume & Wood (2005). **Approximate**:
-    /// relative error of F measured between about 1e-4 and 6e-2 (worst near z = (−5, −5, −5, 0));
-    /// ω do not sum to exactly 1. Any d. Provided for comparison with other libraries.
+    /// relative errors of F up to several percent (measured: `docs/accuracy.md`); ω do not sum to
+    /// exactly 1. Any d. Provided for comparison with other libraries.
     Saddlepoint,
 }
 

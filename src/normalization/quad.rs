@@ -1,7 +1,8 @@
 //! d = 3 and d = 4: the normalization constant as an exact 1-D integral of Bessel functions.
 //!
 //! Split the coordinates into two groups whose squared norms are `u` and `1 − u`
-//! (DESIGN.md §2). With `z` sorted ascending and `z_d = 0`:
+//! (`docs/design.md`, § "d = 3, 4: one-dimensional Bessel integrals"). With `z` sorted
+//! ascending and `z_d = 0`:
 //!
 //! * d = 4: two circles, `(z1, z2)` of radius² `u` and `(z3, z4)` of radius² `1 − u`:
 //!   `F = 2π² ∫₀¹ A(u) B(1−u) du`, `A(r) = e^{r z2} I0e(r (z2−z1)/2)`, `B(r) = I0e(r (z4−z3)/2)`.
@@ -19,11 +20,10 @@
 //! boundary layers (width `1/|z|` in `u`) are resolved by Gauss–Legendre panels graded
 //! geometrically from the smallest feature scale. The exponential factor `e^{u z}` is cut where
 //! it drops below `e^{−50}` (a relative truncation error below 1e-18, see `Layout::trunc`). The rule's
-//! error is measured against a 65-digit reference (`tests/data`, 272 points with |z| up to 1e6):
-//! `|Δ log F| ≤ 1.8e-15` and relative `Δω_i ≤ 3.6e-15`. Hessian entries are accurate to about
-//! 1e-9 relative to the scale of their row: a covariance `E[x_i² x_j²] − ω_i ω_j` of nearly
-//! independent coordinates cancels digits. The MLE's accuracy depends on `ω` only; the Hessian
-//! only steers its Newton steps.
+//! error is measured against 65-digit references (`tests/data`); the figures are in
+//! `docs/accuracy.md`. Hessian entries are less accurate than `ω` (relative to the scale of their
+//! row): a covariance `E[x_i² x_j²] − ω_i ω_j` of nearly independent coordinates cancels digits.
+//! The MLE's accuracy depends on `ω` only; the Hessian only steers its Newton steps.
 //!
 //! Range: every sum is accumulated with exact power-of-two scale factors per group and half
 //! (see `Scaling`): the near group's `√r·g` and the far group's `g` are multiplied by a
@@ -35,9 +35,9 @@
 //! ([`crate::special::i01e_times`]), so no factor underflows: for any finite `z`, `log F`
 //! and every `ω_i` (down to `1/(2|z_i|)` ≈ 3e-309) keep their relative accuracy. Grading
 //! starts no lower than `1e-20·t_max` (`FLOOR`), which bounds the panel count when
-//! `1/√β ≪ t_max`. Measured: against 65-digit references at |z| = 1e10, 1e100, 1e300
+//! `1/√β ≪ t_max`. Checked against 65-digit references at |z| = 1e10, 1e100, 1e300
 //! (`tests/data/normalization_extreme.csv`) and against the two-Gaussian asymptote for all
-//! |z_i| ≥ 1e20 (`tests/totality.rs`).
+//! |z_i| ≥ 1e20 (`tests/totality.rs`); figures in `docs/accuracy.md`.
 
 use super::gauss::gauss_legendre_unit;
 use crate::error::Result;

@@ -1,14 +1,15 @@
 //! The third-order saddlepoint approximation of Kume & Wood (2005), any d. **APPROXIMATE.**
 //!
 //! This is [`Method::Saddlepoint`](super::Method::Saddlepoint): fast (O(d) per value, no
-//! quadrature) but not exact. Measured against the exact method on grids of z in
-//! `[−1e6, 0]` (`tests/saddlepoint.rs`), the relative error of `F` is typically 1e-3 to 4e-2:
-//! 6e-5…1.4e-2 for d = 6, 2e-4…5.8e-2 for d = 4 (worst at `z = (−5, −5, −5, 0)`), 6e-4…4.1e-2
-//! for d = 3; about 1.3e-2 whenever a single direction dominates (`R` is then nearly a
-//! Gamma(½) variable); smallest near the uniform distribution in higher d. The ω have errors of
-//! the same size. Use [`Method::Exact`](super::Method::Exact) unless speed matters more.
+//! quadrature) but not exact: relative errors of `F` up to several percent — largest at moderate
+//! concentration around one direction, roughly constant whenever a single direction dominates
+//! (`R` is then nearly a Gamma(½) variable), smallest near the uniform distribution in higher
+//! d; the ω have errors of the same size. Measured against the
+//! exact method by `tests/saddlepoint.rs`; the figures are in `docs/accuracy.md`
+//! (§ "Saddlepoint approximation"). Use [`Method::Exact`](super::Method::Exact) unless speed
+//! matters more.
 //!
-//! # Formula (DESIGN.md §2)
+//! # Formula (`docs/design.md`, § "Saddlepoint approximation")
 //! With `λ_i = c − z_i > 0` and the cumulant generating function `K(t) = −½ Σ log(1 − t/λ_i)` of
 //! `R = Σ y_i²/(2λ_i)`, `K⁽ʲ⁾(t) = ((j−1)!/2) Σ (λ_i − t)^{−j}`, the saddle point `t̂` solves
 //! `K'(t̂) = 1`, and
