@@ -18,12 +18,17 @@
 //! 2. **Prediction** `q ← q ⊗ Δq ⊗ w`: `Δq` the body-frame increment of the bias-corrected rate
 //!    (exact rotation of the Bingham state), `w` isotropic rotation noise of standard deviation
 //!    `gyro_noise·√dt` ([`crate::observation::noise_from_angle_std`], moment-matched exactly).
-//! 3. **Accelerometer** as a vector observation of "up" ([`crate::observation::davenport_matrix`]):
-//!    the likelihood `exp(κ upᵀ R(q) a/|a|)` is Bingham in `q`, the update exact, heading
-//!    untouched. `κ = 1/acc_noise²`, reduced when `|a|` departs from `gravity` (linear
-//!    acceleration): `κ / (1 + ((|a| − g)/acc_reject)²)`. Samples with `|a| < gravity/4`
-//!    (free fall, or no accelerometer data) are skipped.
-//! 4. **Magnetometer** as a heading observation that cannot tilt the estimate: the field is
+//! 3. **Accelerometer** as a vector observation of "up" ([`crate::observation::davenport_matrix`])
+//!    with `a` the accelerometer low-passed in the gyroscope-integrated (quasi-inertial) frame
+//!    (second-order Butterworth, time constant `acc_tau`; its states are turned with every
+//!    gyroscope increment; it starts as a running mean over its first `acc_tau`): gravity stands
+//!    still there while linear accelerations average out. The likelihood
+//!    `exp(κ upᵀ R(q) a/|a|)` is Bingham in `q`, the update exact, heading untouched.
+//!    `κ = 1/acc_noise²`, reduced when `|a|` departs from `gravity`:
+//!    `κ / (1 + ((|a| − g)/acc_reject)²)`. Samples with `|acc| < gravity/4` (free fall, or no
+//!    accelerometer data) are not fed to the low-pass filter.
+//! 4. **Magnetometer** as a heading observation that cannot tilt the estimate: the field,
+//!    low-passed like the accelerometer (`mag_tau`; disturbed samples are not fed), is
 //!    rotated to the world frame with the current estimate, its horizontal direction gives the
 //!    heading error `δ`, and the likelihood `exp(−2κ e_z²)` with `e = q ⊗ q_m*`,
 //!    `q_m = Rz(δ) ⊗ q̂` (the von Mises density `exp(κ cos ψ)` of the heading error `ψ`, written
@@ -196,6 +201,11 @@ fn lp_coeff(dt: f64, tau: f64) -> f64 {
     1.0 - (-dt / tau).exp()
 }
 
+/// The number of samples in one time constant `tau` (at least 1, at most `u32::MAX`).
+fn warmup(dt: f64, tau: f64) -> u32 {
+    (tau / dt).ceil().clamp(1.0, f64::from(u32::MAX)) as u32
+}
+
 /// Time constant (s) of the low-pass filters of the rest detection.
 const REST_FILTER_TIME: f64 = 0.5;
 /// Time constant (s) with which a disturbed field's candidate reference follows it.
@@ -210,6 +220,9 @@ struct Coeffs {
     candidate: f64,
     acc: [f64; 5],
     mag: [f64; 5],
+    /// Warm-up lengths (samples) of the accelerometer's and magnetometer's low-pass filters.
+    acc_warmup: u32,
+    mag_warmup: u32,
 }
 
 impl Coeffs {
@@ -222,6 +235,8 @@ impl Coeffs {
             candidate: lp_coeff(dt, CANDIDATE_TIME),
             acc: butterworth(dt, p.acc_tau),
             mag: butterworth(dt, p.mag_tau),
+            acc_warmup: warmup(dt, p.acc_tau),
+            mag_warmup: warmup(dt, p.mag_tau),
         }
     }
 }
@@ -290,26 +305,42 @@ fn butterworth(dt: f64, tau: f64) -> [f64; 5] {
 /// A second-order low-pass filter of a vector that is fixed in the quasi-inertial frame: its
 /// output and states are expressed in the sensor frame and turned with every gyroscope
 /// increment, so the filter averages in the frame where gravity and the magnetic field stand
-/// still.
+/// still. It starts as a running mean over its first `τ/dt` samples (so the first output is not
+/// one noisy sample held for a time constant) and continues from that mean in steady state.
 #[derive(Debug, Clone, PartialEq)]
 struct InertialLowPass {
     coeff: [f64; 5],
     y: [f64; 3],
     s0: [f64; 3],
     s1: [f64; 3],
+    /// Samples averaged so far while warming up, and how many the warm-up takes.
+    count: u32,
+    warmup: u32,
 }
 
 impl InertialLowPass {
-    /// The filter in steady state at `x`.
-    fn new(coeff: [f64; 5], x: &[f64; 3]) -> InertialLowPass {
-        let b0 = coeff[0];
-        let (b2, a2) = (coeff[2], coeff[4]);
-        InertialLowPass {
+    /// The filter started at the sample `x`; `warmup` samples are averaged before the
+    /// second-order filter takes over.
+    fn new(coeff: [f64; 5], warmup: u32, x: &[f64; 3]) -> InertialLowPass {
+        let mut f = InertialLowPass {
             coeff,
             y: *x,
-            s0: scale3(x, 1.0 - b0),
-            s1: scale3(x, b2 - a2),
+            s0: [0.0; 3],
+            s1: [0.0; 3],
+            count: 1,
+            warmup,
+        };
+        if f.count >= f.warmup {
+            f.settle();
         }
+        f
+    }
+
+    /// Puts the second-order filter in steady state at the current output.
+    fn settle(&mut self) {
+        let [b0, _, b2, _, a2] = self.coeff;
+        self.s0 = scale3(&self.y, 1.0 - b0);
+        self.s1 = scale3(&self.y, b2 - a2);
     }
 
     /// Expresses the state in the next sensor frame (`dq` the body-frame increment).
@@ -319,8 +350,19 @@ impl InertialLowPass {
         self.s1 = q4::rotate_inverse(dq, &self.s1);
     }
 
-    /// One sample (direct form II transposed).
+    /// One sample: the running mean while warming up, then direct form II transposed.
     fn step(&mut self, x: &[f64; 3]) {
+        if self.count < self.warmup {
+            self.count += 1;
+            let k = 1.0 / f64::from(self.count);
+            for (y, &xi) in self.y.iter_mut().zip(x) {
+                *y += k * (xi - *y);
+            }
+            if self.count == self.warmup {
+                self.settle();
+            }
+            return;
+        }
         let [b0, b1, b2, a1, a2] = self.coeff;
         for (i, &xi) in x.iter().enumerate() {
             let y = b0 * xi + self.s0[i];
@@ -385,7 +427,7 @@ impl Ahrs {
             acc_lp: [0.0; 3],
             rest_timer: 0.0,
             mag: None,
-            acc_filter: InertialLowPass::new(coeffs.acc, &[0.0; 3]),
+            acc_filter: InertialLowPass::new(coeffs.acc, coeffs.acc_warmup, &[0.0; 3]),
             mag_filter: None,
             samples: 0,
         })
@@ -561,7 +603,8 @@ impl Ahrs {
         if let Some(m) = mag {
             let q = f.mode4()?;
             if let Some(kappa) = self.magnetic_weight(&q, m, &mut mag_ref) {
-                let mf = mag_filter.get_or_insert_with(|| InertialLowPass::new(c.mag, m));
+                let mf =
+                    mag_filter.get_or_insert_with(|| InertialLowPass::new(c.mag, c.mag_warmup, m));
                 mf.step(m);
                 let mw = q4::rotate(&q, &mf.y);
                 let h = (mw[0] * mw[0] + mw[1] * mw[1]).sqrt();
@@ -708,8 +751,9 @@ impl Ahrs {
         self.filter = Some(f);
         self.gyr_lp = *gyr;
         self.acc_lp = *acc;
-        self.acc_filter = InertialLowPass::new(self.coeffs.acc, acc);
-        self.mag_filter = mag.map(|m| InertialLowPass::new(self.coeffs.mag, m));
+        self.acc_filter = InertialLowPass::new(self.coeffs.acc, self.coeffs.acc_warmup, acc);
+        self.mag_filter =
+            mag.map(|m| InertialLowPass::new(self.coeffs.mag, self.coeffs.mag_warmup, m));
         self.mag = mag_ref;
         self.samples = 1;
         Ok(())
