@@ -2090,31 +2090,51 @@ fn filter_sequence(
 #[test]
 fn fuzz_filter_sequences() {
     // each sequence makes ~20 calls on average: count calls, not sequences
-    let target = cases_for(1.0, 1.0, SHARE_FILTER);
-    let slot_label = "bingham_filter";
     let mut stats: BTreeMap<String, u64> = BTreeMap::new();
-    let slot = CaseSlot::new(slot_label);
+    run_sequences(
+        "bingham_filter",
+        "filter",
+        99,
+        cases_for(1.0, 1.0, SHARE_FILTER),
+        |seed, verbose| filter_sequence(seed, verbose, &mut stats),
+    );
+    if stats_wanted() {
+        eprintln!("bingham_filter statuses: {stats:?}");
+    }
+}
+
+/// Runs random call sequences until `target` calls were made (or the one sequence named by
+/// `BINGHAM_FUZZ_REPRO=label:seed`), collecting up to 20 failures with their reproduction line.
+/// `sequence(seed, verbose)` returns the number of calls it made. `tag` keeps the seeds of
+/// different harnesses apart.
+fn run_sequences(
+    label: &'static str,
+    test: &str,
+    tag: u64,
+    target: u64,
+    mut sequence: impl FnMut(u64, bool) -> Result<u64, String>,
+) {
+    let slot = CaseSlot::new(label);
     if let Some((l, seed)) = repro() {
-        if l == slot_label {
+        if l == label {
             slot.enter(seed);
-            let r = filter_sequence(seed, true, &mut stats);
+            let r = sequence(seed, true);
             slot.leave();
             match r {
-                Ok(n) => eprintln!("{slot_label} case seed {seed}: passed ({n} calls)"),
-                Err(e) => panic!("{slot_label} case seed {seed}: {e}"),
+                Ok(n) => eprintln!("{label} case seed {seed}: passed ({n} calls)"),
+                Err(e) => panic!("{label} case seed {seed}: {e}"),
             }
         }
         return;
     }
     let start = Instant::now();
-    let mut calls = 0u64;
+    let (mut calls, mut i) = (0u64, 0u64);
     let mut failures = Vec::new();
-    let mut i = 0u64;
     while calls < target {
-        let seed = mix(base_seed() ^ (99 << 48) ^ i);
+        let seed = mix(base_seed() ^ (tag << 48) ^ i);
         i += 1;
         slot.enter(seed);
-        let r = filter_sequence(seed, false, &mut stats);
+        let r = sequence(seed, false);
         slot.leave();
         match r {
             Ok(n) => calls += n,
@@ -2122,8 +2142,8 @@ fn fuzz_filter_sequences() {
                 calls += 1;
                 if failures.len() < 20 {
                     failures.push(format!(
-                        "  {slot_label} case seed {seed}: {e}\n    reproduce: BINGHAM_FUZZ_REPRO={slot_label}:{seed} \
-                         cargo test --release --test fuzz_ffi fuzz_filter -- --nocapture"
+                        "  {label} case seed {seed}: {e}\n    reproduce: BINGHAM_FUZZ_REPRO={label}:{seed} \
+                         cargo test --release --test fuzz_ffi fuzz_{test} -- --nocapture"
                     ));
                 }
             }
@@ -2132,13 +2152,13 @@ fn fuzz_filter_sequences() {
     if stats_wanted() {
         let t = start.elapsed().as_secs_f64();
         eprintln!(
-            "{slot_label:<48} {calls:>9} calls ({i} sequences) {t:>8.2} s {:>9.1} µs/call  {stats:?}",
+            "{label:<48} {calls:>9} calls ({i} sequences) {t:>8.2} s {:>9.1} µs/call",
             t * 1e6 / calls.max(1) as f64
         );
     }
     assert!(
         failures.is_empty(),
-        "{} filter sequences failed:\n{}",
+        "{} {test} sequences failed:\n{}",
         failures.len(),
         failures.join("\n")
     );
@@ -3353,55 +3373,12 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
 
 #[test]
 fn fuzz_ahrs_sequences() {
-    let target = cases_for(1.0, 1.0, SHARE_AHRS);
-    let label = "bingham_ahrs";
-    let slot = CaseSlot::new(label);
-    if let Some((l, seed)) = repro() {
-        if l == label {
-            slot.enter(seed);
-            let r = ahrs_sequence(seed, true);
-            slot.leave();
-            match r {
-                Ok(n) => eprintln!("{label} case seed {seed}: passed ({n} calls)"),
-                Err(e) => panic!("{label} case seed {seed}: {e}"),
-            }
-        }
-        return;
-    }
-    let start = Instant::now();
-    let (mut calls, mut i) = (0u64, 0u64);
-    let mut failures = Vec::new();
-    while calls < target {
-        let seed = mix(base_seed() ^ (98 << 48) ^ i);
-        i += 1;
-        slot.enter(seed);
-        let r = ahrs_sequence(seed, false);
-        slot.leave();
-        match r {
-            Ok(n) => calls += n,
-            Err(e) => {
-                calls += 1;
-                if failures.len() < 20 {
-                    failures.push(format!(
-                        "  {label} case seed {seed}: {e}\n    reproduce: BINGHAM_FUZZ_REPRO={label}:{seed} \
-                         cargo test --release --test fuzz_ffi fuzz_ahrs -- --nocapture"
-                    ));
-                }
-            }
-        }
-    }
-    if stats_wanted() {
-        let t = start.elapsed().as_secs_f64();
-        eprintln!(
-            "{label:<48} {calls:>9} calls ({i} sequences) {t:>8.2} s {:>9.1} µs/call",
-            t * 1e6 / calls.max(1) as f64
-        );
-    }
-    assert!(
-        failures.is_empty(),
-        "{} AHRS sequences failed:\n{}",
-        failures.len(),
-        failures.join("\n")
+    run_sequences(
+        "bingham_ahrs",
+        "ahrs",
+        98,
+        cases_for(1.0, 1.0, SHARE_AHRS),
+        ahrs_sequence,
     );
 }
 
