@@ -30,21 +30,8 @@
 static const double PI = 3.14159265358979323846;
 static void *no_access_page; /* PROT_NONE: any access crashes */
 
-static const char *last_message(void) {
-    static char buf[1024];
-    size_t len = 0;
-    bingham_last_error_message(buf, sizeof buf, &len);
-    return buf;
-}
-
 /* The last message starts with "<fn>: " and contains `needle` (if not NULL). */
-static void check_msg(const char *fn, const char *needle) {
-    const char *msg = last_message();
-    size_t nl = strlen(fn);
-    int ok = strncmp(msg, fn, nl) == 0 && msg[nl] == ':' && (!needle || strstr(msg, needle));
-    if (!ok) fprintf(stderr, "    message \"%s\" should name %s and contain \"%s\"\n", msg, fn, needle ? needle : "");
-    CHECK(ok);
-}
+#define check_msg(fn, needle) CHECK_MESSAGE(fn, needle)
 
 static void check_null_msg(const char *fn, const char *arg) {
     char needle[64];

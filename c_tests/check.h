@@ -50,6 +50,28 @@ static void check_report(int ok, const char *file, int line, const char *what) {
         check_report(check_ok_, __FILE__, __LINE__, #a " ~ " #b);                               \
     } while (0)
 
+/* The calling thread's last error message (in a static buffer, overwritten by the next call). */
+static inline const char *check_last_message(void) {
+    static char buf[1024];
+    size_t len = 0;
+    bingham_last_error_message(buf, sizeof buf, &len);
+    return buf;
+}
+
+/* After a failure of `fn`: the last message starts with "<fn>: " and contains `needle` (if not
+ * NULL). Counts as one check, reported at the caller's line. */
+#define CHECK_MESSAGE(fn, needle) check_message_at((fn), (needle), __FILE__, __LINE__)
+
+static inline void check_message_at(const char *fn, const char *needle, const char *file, int line) {
+    const char *msg = check_last_message();
+    size_t nl = strlen(fn);
+    int ok = strncmp(msg, fn, nl) == 0 && msg[nl] == ':' && (!needle || strstr(msg, needle));
+    if (!ok)
+        fprintf(stderr, "    message \"%s\" should name %s and contain \"%s\"\n", msg, fn,
+                needle ? needle : "");
+    check_report(ok, file, line, "last error message");
+}
+
 static int check_summary(const char *program) {
     if (check_failures == 0) {
         printf("%s: all %d checks passed\n", program, check_count);
