@@ -46,6 +46,8 @@
 //!
 //! Every step is allocation-free; a refused sample leaves the AHRS exactly as it was.
 
+use nalgebra::Matrix4;
+
 use crate::error::{Error, Result};
 use crate::filter::BinghamFilter;
 use crate::observation::{noise_from_angle_std, observation_exponent};
@@ -273,17 +275,11 @@ fn check_sample(what: &str, v: &[f64; 3]) -> Result<()> {
 
 /// The exponent matrix `−2κ u uᵀ` of the heading likelihood `exp(−2κ e_z²)`, `e = q ⊗ q_m*`:
 /// `e_z = uᵀ q` with `u` the last row of `R(q_m*)` (`x ⊕ y = R(y) x`).
-fn heading_exponent(q_m: &[f64; 4], kappa: f64) -> [[f64; 4]; 4] {
+fn heading_exponent(q_m: &[f64; 4], kappa: f64) -> Matrix4<f64> {
     let c = q4::conj(q_m);
     // Row 3 of R(c) (see quaternion::right_matrix): [c3, c2, −c1, c0].
     let u = [c[3], c[2], -c[1], c[0]];
-    let mut p = [[0.0; 4]; 4];
-    for i in 0..4 {
-        for j in 0..4 {
-            p[i][j] = -2.0 * kappa * u[i] * u[j];
-        }
-    }
-    p
+    Matrix4::from_fn(|i, j| -2.0 * kappa * u[i] * u[j])
 }
 
 /// Coefficients `(b0, b1, b2, a1, a2)` of a second-order Butterworth low-pass filter with time

@@ -22,10 +22,14 @@
 //!
 //! # Speed and memory
 //!
-//! The filter works on fixed-size stack arrays: after the first step with a given noise, a
-//! predict or update performs **no heap allocation**. The noises' validation, normalization and
-//! moments are cached, keyed on the bit patterns of the noise parameters, so passing the same
-//! arrays every step costs nothing. The moment-matching solver is warm-started from the previous
+//! The filter calls the crate's core operations (the same functions [`Bingham`] uses: parameter
+//! validation in `params`, moments and the eigendecomposition in `matrix`, the composed moment in
+//! [`crate::quaternion`], the MLE in [`crate::mle`], the Bayes product in
+//! [`crate::distribution`]), instantiated with the fixed-size nalgebra types `SMatrix<f64, d, d>`
+//! for `d = 2, 4`, which live on the stack: after the first step with a given noise, a predict
+//! or update performs **no heap allocation**. The noises' validation, normalization and moments
+//! are cached, keyed on the bit patterns of the noise parameters, so passing the same arrays
+//! every step costs nothing. The moment-matching solver is warm-started from the previous
 //! prediction.
 //!
 //! # Concentration limits
@@ -38,10 +42,19 @@
 //! eigenvalue is at least that of the state's moment, so the prediction never fails because the
 //! state (or the noise) is sharp.
 
-use crate::distribution::Bingham;
+use nalgebra::{Const, Matrix4, SMatrix, SVector};
+
+use crate::distribution::{bayes_product, log_f_omega, product_eigen_precision, Bingham};
 use crate::error::{Error, Result};
-use crate::fixed::{self, Mat};
-use nalgebra::{DMatrix, DVector};
+use crate::matrix::{congruence, write_row_major};
+use crate::mle::{fit_second_moment, Derivs};
+use crate::params::{params_row_major, unit};
+use crate::quaternion::{compose_moments, left, right};
+
+/// A `D×D` matrix on the stack.
+type Mat<const D: usize> = SMatrix<f64, D, D>;
+/// A vector of length `D` on the stack.
+type Vect<const D: usize> = SVector<f64, D>;
 
 /// The largest concentration `|z_i|` the prediction uses (see the module documentation,
 /// "Concentration limits"): before the moments of the state and of the process noise are
@@ -118,15 +131,9 @@ impl BinghamFilter {
     }
 
     /// The current estimate as a [`Bingham`] distribution (allocates; equal to
-    /// [`BinghamFilter::state_into`] up to rounding, as `M` passes through the re-orthonormalization
-    /// of [`Bingham`]).
+    /// [`BinghamFilter::state_into`]).
     pub fn state(&self) -> Bingham {
-        let d = self.dim();
-        let mut m = vec![0.0; d * d];
-        let mut z = vec![0.0; d];
-        self.state_into(&mut m, &mut z)
-            .expect("buffers have the right length");
-        Bingham::from_parts_unchecked(DMatrix::from_row_slice(d, d, &m), DVector::from_vec(z))
+        dispatch!(&self.inner, c => Bingham::from_normalized_parts(&c.m, &c.z))
     }
 
     /// Copies the current estimate into `m` (`d×d` row-major, orthonormal columns, the last one
@@ -253,14 +260,15 @@ impl BinghamFilter {
 
     /// Bayes update (d = 4) with the likelihood `exp(qᵀ P q)`, `P` symmetric (crate-internal:
     /// the AHRS's heading observation).
-    pub(crate) fn update_exponent(&mut self, p: &Mat<4>) -> Result<()> {
+    pub(crate) fn update_exponent(&mut self, p: &Matrix4<f64>) -> Result<()> {
         self.core4_mut()?.update_precision(p)
     }
 
     /// The mode (d = 4) as an array.
     pub(crate) fn mode4(&self) -> Result<[f64; 4]> {
         let c = self.core4()?;
-        Ok([c.m[0][3], c.m[1][3], c.m[2][3], c.m[3][3]])
+        let mode = c.m.column(3);
+        Ok([mode[0], mode[1], mode[2], mode[3]])
     }
 }
 
@@ -272,7 +280,7 @@ fn not_quaternion() -> Error {
 }
 
 /// Validates a vector observation and returns `κ K`.
-fn vector_exponent(body: &[f64], reference: &[f64], kappa: f64) -> Result<Mat<4>> {
+fn vector_exponent(body: &[f64], reference: &[f64], kappa: f64) -> Result<Matrix4<f64>> {
     use crate::observation::{check_direction, check_kappa, observation_exponent};
     let b = check_direction("body", body)?;
     let r = check_direction("reference", reference)?;
@@ -284,7 +292,7 @@ fn vector_exponent(body: &[f64], reference: &[f64], kappa: f64) -> Result<Mat<4>
 #[derive(Debug, Clone, PartialEq)]
 struct Noise<const D: usize> {
     m: Mat<D>,
-    z: [f64; D],
+    z: Vect<D>,
     /// Process noise: the second moment (of the capped concentrations). Measurement noise: unused.
     moment: Mat<D>,
     /// Measurement noise: `log F(z)` (NaN if it could not be evaluated: only
@@ -339,18 +347,18 @@ impl<const D: usize> NoiseCache<D> {
     /// Validates and prepares a noise (no caching).
     fn build(role: Role, m: &[f64], z: &[f64]) -> Result<Noise<D>> {
         let (mm, zz) = match role {
-            Role::Process => fixed::params::<D>("m_w", m, "z_w", z)?,
-            Role::Measurement => fixed::params::<D>("m_v", m, "z_v", z)?,
+            Role::Process => params_row_major(Const::<D>, "m_w", m, "z_w", z)?,
+            Role::Measurement => params_row_major(Const::<D>, "m_v", m, "z_v", z)?,
         };
         let (moment, log_f) = match role {
             Role::Process => {
-                let (_, w) = fixed::log_f_omega(&capped(&zz))?;
-                (fixed::congruence(&mm, &w), 0.0)
+                let (_, w) = log_f_omega(&capped(&zz))?;
+                (congruence(&mm, &w), 0.0)
             }
             // The Bayes product does not need log F: an update must not fail on it.
             Role::Measurement => (
-                fixed::zeros::<D>(),
-                fixed::log_f_omega(&zz).map_or(f64::NAN, |r| r.0),
+                Mat::<D>::zeros(),
+                log_f_omega(&zz).map_or(f64::NAN, |r| r.0),
             ),
         };
         Ok(Noise {
@@ -374,10 +382,8 @@ impl<const D: usize> NoiseCache<D> {
 }
 
 /// `z` with every entry below `−MAX_CONCENTRATION` raised to it.
-fn capped<const D: usize>(z: &[f64; D]) -> [f64; D] {
-    let mut c = *z;
-    c.iter_mut().for_each(|v| *v = v.max(-MAX_CONCENTRATION));
-    c
+fn capped<const D: usize>(z: &Vect<D>) -> Vect<D> {
+    z.map(|v| v.max(-MAX_CONCENTRATION))
 }
 
 /// The filter for one dimension.
@@ -386,16 +392,16 @@ struct Core<const D: usize> {
     /// Orthonormal, row-major; the last column is the mode.
     m: Mat<D>,
     /// Ascending, `z[D−1] = 0`.
-    z: [f64; D],
+    z: Vect<D>,
     /// The last prediction's moment-matching solution with its derivatives (warm start).
-    predicted: Option<fixed::Derivs<D>>,
+    predicted: Option<Derivs<Const<D>>>,
     process: NoiseCache<D>,
     measurement: NoiseCache<D>,
 }
 
 impl<const D: usize> Core<D> {
     fn new(m: &[f64], z: &[f64]) -> Result<Self> {
-        let (m, z) = fixed::params::<D>("m", m, "z", z)?;
+        let (m, z) = params_row_major(Const::<D>, "m", m, "z", z)?;
         Ok(Core {
             m,
             z,
@@ -406,7 +412,7 @@ impl<const D: usize> Core<D> {
     }
 
     fn set_state(&mut self, m: &[f64], z: &[f64]) -> Result<()> {
-        let (m, z) = fixed::params::<D>("m", m, "z", z)?;
+        let (m, z) = params_row_major(Const::<D>, "m", m, "z", z)?;
         self.m = m;
         self.z = z;
         self.predicted = None;
@@ -422,10 +428,8 @@ impl<const D: usize> Core<D> {
                 z.len()
             )));
         }
-        for i in 0..D {
-            m[i * D..(i + 1) * D].copy_from_slice(&self.m[i]);
-        }
-        z.copy_from_slice(&self.z);
+        write_row_major(&self.m, m);
+        z.copy_from_slice(self.z.as_slice());
         Ok(())
     }
 
@@ -436,23 +440,21 @@ impl<const D: usize> Core<D> {
                 out.len()
             )));
         }
-        for (o, row) in out.iter_mut().zip(self.m.iter()) {
-            *o = row[D - 1];
-        }
+        out.copy_from_slice(self.m.column(D - 1).as_slice());
         Ok(())
     }
 
     fn predict(&mut self, u: Option<&[f64]>, m_w: &[f64], z_w: &[f64]) -> Result<()> {
-        let u = u.map(|u| fixed::unit::<D>("u", u)).transpose()?;
+        let u = u.map(|u| unit("u", Const::<D>, u)).transpose()?;
         let noise = self.process.get(Role::Process, m_w, z_w)?;
         let m = match u {
-            Some(u) => fixed::mat_mul(&fixed::right(&u), &self.m),
+            Some(u) => right(Const::<D>, u.as_slice()) * self.m,
             None => self.m,
         };
-        let (_, w) = fixed::log_f_omega(&capped(&self.z))?;
-        let a = fixed::congruence(&m, &w);
-        let c = fixed::compose_moments(&a, &noise.moment);
-        let (m_new, z_new, solution) = fixed::mle(&c, self.predicted.as_ref())?;
+        let (_, w) = log_f_omega(&capped(&self.z))?;
+        let a = congruence(&m, &w);
+        let c = compose_moments(&a, &noise.moment);
+        let (m_new, z_new, solution) = fit_second_moment(&c, self.predicted.as_ref())?;
         self.m = m_new;
         self.z = z_new;
         self.predicted = Some(solution);
@@ -460,38 +462,32 @@ impl<const D: usize> Core<D> {
     }
 
     /// `M_L = L(ẑ) D M_v`: the likelihood's principal directions.
-    fn likelihood_m(zhat: &[f64; D], m_v: &Mat<D>) -> Mat<D> {
+    fn likelihood_m(zhat: &Vect<D>, m_v: &Mat<D>) -> Mat<D> {
         let mut dm = *m_v;
-        for row in dm.iter_mut().skip(1) {
-            row.iter_mut().for_each(|v| *v = -*v);
+        for mut row in dm.row_iter_mut().skip(1) {
+            row.neg_mut();
         }
-        fixed::mat_mul(&fixed::left(zhat), &dm)
+        left(Const::<D>, zhat.as_slice()) * dm
     }
 
     fn update(&mut self, measurement: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<()> {
-        let zhat = fixed::unit::<D>("measurement", measurement)?;
+        let zhat = unit("measurement", Const::<D>, measurement)?;
         let noise = self.measurement.get(Role::Measurement, m_v, z_v)?;
         let ml = Self::likelihood_m(&zhat, &noise.m);
-        let p = fixed::congruence(&ml, &noise.z);
+        let p = congruence(&ml, &noise.z);
         self.update_precision(&p)
     }
 
     /// Bayes product with the likelihood `exp(xᵀ P x)`; the state is assigned only on success.
     fn update_precision(&mut self, p: &Mat<D>) -> Result<()> {
-        let (v, l) = fixed::product_eigen_precision(&self.m, &self.z, p)?;
-        let (m_new, z_new) = fixed::normalize(&v, &l);
-        if !z_new.iter().all(|v| v.is_finite()) {
-            return Err(Error::Numerical(
-                "update: the posterior concentrations are not finite".into(),
-            ));
-        }
+        let (m_new, z_new) = bayes_product(&self.m, &self.z, p)?;
         self.m = m_new;
         self.z = z_new;
         Ok(())
     }
 
     fn log_likelihood(&self, measurement: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<f64> {
-        let zhat = fixed::unit::<D>("measurement", measurement)?;
+        let zhat = unit("measurement", Const::<D>, measurement)?;
         let built;
         let noise = match self.measurement.lookup(m_v, z_v) {
             Some(n) => n,
@@ -506,7 +502,7 @@ impl<const D: usize> Core<D> {
             ));
         }
         let ml = Self::likelihood_m(&zhat, &noise.m);
-        let p = fixed::congruence(&ml, &noise.z);
+        let p = congruence(&ml, &noise.z);
         let value = self.log_likelihood_precision(&p)? - noise.log_f;
         if !value.is_finite() {
             return Err(Error::Numerical(format!(
@@ -519,12 +515,9 @@ impl<const D: usize> Core<D> {
     /// `log ∫ f_state(x) exp(xᵀ P x) dx` (surface measure): with `λ` the largest eigenvalue of
     /// `M Z Mᵀ + P`, `log F(eig − λ) + λ − log F(Z)`.
     fn log_likelihood_precision(&self, p: &Mat<D>) -> Result<f64> {
-        let (_, l) = fixed::product_eigen_precision(&self.m, &self.z, p)?;
+        let (_, l) = product_eigen_precision(&self.m, &self.z, p)?;
         let top = l[D - 1];
-        let mut zp = [0.0; D];
-        for (o, v) in zp.iter_mut().zip(l.iter()) {
-            *o = v - top;
-        }
+        let zp = l.map(|v| v - top);
         // As in the update: the posterior's concentrations may overflow (a state or noise near
         // the largest double); that is a numerical failure, not an invalid argument.
         if !zp.iter().all(|v| v.is_finite()) {
@@ -532,8 +525,8 @@ impl<const D: usize> Core<D> {
                 "log-likelihood: the posterior concentrations are not finite".into(),
             ));
         }
-        let (lf_post, _) = fixed::log_f_omega(&zp)?;
-        let (lf_state, _) = fixed::log_f_omega(&self.z)?;
+        let (lf_post, _) = log_f_omega(&zp)?;
+        let (lf_state, _) = log_f_omega(&self.z)?;
         let value = lf_post + top - lf_state;
         if !value.is_finite() {
             return Err(Error::Numerical(format!(
@@ -550,8 +543,8 @@ impl<const D: usize> Core<D> {
                 out.len()
             )));
         }
-        let (_, w) = fixed::log_f_omega(&self.z)?;
-        crate::observation::spread_from_omega(&w, out);
+        let (_, w) = log_f_omega(&self.z)?;
+        crate::observation::spread_from_omega(w.as_slice(), out);
         Ok(())
     }
 }

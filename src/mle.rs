@@ -5,13 +5,22 @@
 //! with `z_d = 0` by Newton's method with the exact Jacobian `∂ω_i/∂z_j = Cov(x_i², x_j²)`
 //! (positive definite on the constrained space) and a backtracking line search on the
 //! relative residual. The solution is unique; it exists iff all ω̂_i > 0.
+//!
+//! One implementation, generic over the dimension type (see the `matrix` module): the public
+//! functions (`Dyn`, or the stack types for d ≤ 4) and the filter's predict (`Const<2>`,
+//! `Const<4>`, warm-started from the previous prediction's solution and derivatives) both call
+//! `fit_second_moment`. The composition [`Bingham::compose`] (moment matching) lives here too.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{Const, DMatrix, DefaultAllocator, Dim, Dyn};
 
-use crate::distribution::{sym_eigen_ascending, unit_vector, Bingham};
+use crate::distribution::Bingham;
 use crate::error::{check_dim, check_finite, Error, Result, MAX_DIM};
+use crate::matrix::{sym_eigen, symmetrize, zero_vector, zeros, Square, Vector};
 use crate::normalization::d2::omega1_with_slope;
 use crate::normalization::{log_normalization_into, Method};
+use crate::params::{normalize, unit};
+use crate::quaternion::compose_moments;
 
 /// Smallest accepted eigenvalue of the trace-normalized second moment. Below it the moment
 /// is singular to working precision (the eigenvalues of `S` are only known to about 1e-16) and
@@ -53,16 +62,45 @@ pub fn mle_from_second_moment(s: &DMatrix<f64>) -> Result<Bingham> {
             "second moment is not symmetric: max |S − Sᵀ|/tr S = {asym:e}"
         )));
     }
-    // d = 2, 4: the same algorithm on stack arrays (the filter's allocation-free path), which
-    // normalizes by the trace and symmetrizes itself.
+    // The same function for every d; d ≤ 4 on the stack.
     match d {
-        2 => return fixed_mle::<2>(s),
-        4 => return fixed_mle::<4>(s),
-        _ => {}
+        2 => fit_matrix(Const::<2>, s),
+        3 => fit_matrix(Const::<3>, s),
+        4 => fit_matrix(Const::<4>, s),
+        _ => fit_matrix(Dyn(d), s),
     }
-    let sn = s / tr;
-    let sym = (&sn + sn.transpose()) * 0.5;
-    let (m, w) = sym_eigen_ascending(sym)?;
+}
+
+/// [`fit_second_moment`] of the validated `s` as a [`Bingham`], computed in the dimension type
+/// `d`.
+fn fit_matrix<D: Dim>(d: D, s: &DMatrix<f64>) -> Result<Bingham>
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D>,
+{
+    let a = Square::from_fn_generic(d, d, |i, j| s[(i, j)]);
+    let (m, z, _) = fit_second_moment(&a, None)?;
+    Ok(Bingham::from_normalized_parts(&m, &z))
+}
+
+/// The Bingham distribution with second moment `s` (symmetric PSD, any positive scale), with
+/// an optional warm start (a previous solution with its derivatives; on failure from there the
+/// cold start is tried). Returns normalized `(M, z)` and the solution's derivatives (for the
+/// next warm start). No validation beyond the trace and the smallest eigenvalue (the caller's
+/// moments are finite and symmetric to rounding).
+pub(crate) fn fit_second_moment<D: Dim>(
+    s: &Square<D>,
+    warm: Option<&Derivs<D>>,
+) -> Result<(Square<D>, Vector<D>, Derivs<D>)>
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D>,
+{
+    let tr: f64 = (0..s.nrows()).map(|i| s[(i, i)]).sum();
+    if tr.is_nan() || tr <= 0.0 {
+        return Err(Error::InvalidArgument(format!(
+            "second moment must have a positive trace, got {tr}"
+        )));
+    }
+    let (m, w) = sym_eigen(&symmetrize(&s.map(|v| v / tr)))?;
     if w[0] < OMEGA_MIN {
         return Err(Error::InvalidArgument(format!(
             "second moment is singular or not positive semidefinite: smallest eigenvalue \
@@ -71,25 +109,12 @@ pub fn mle_from_second_moment(s: &DMatrix<f64>) -> Result<Bingham> {
             w[0]
         )));
     }
-    let z = solve_z(w.as_slice(), None)?;
-    Ok(Bingham::from_parts_unchecked(
-        m,
-        DVector::from_column_slice(&z),
-    ))
-}
-
-fn fixed_mle<const D: usize>(s: &DMatrix<f64>) -> Result<Bingham> {
-    let mut a = [[0.0; D]; D];
-    for (i, row) in a.iter_mut().enumerate() {
-        for (j, v) in row.iter_mut().enumerate() {
-            *v = s[(i, j)];
-        }
-    }
-    let (m, z, _) = crate::fixed::mle::<D>(&a, None)?;
-    Ok(Bingham::from_normalized_unchecked(
-        DMatrix::from_fn(D, D, |i, j| m[i][j]),
-        DVector::from_column_slice(&z),
-    ))
+    let (sol, _) = match warm {
+        Some(d) => solve_z(&w, Start::Evaluated(d)).or_else(|_| solve_z(&w, Start::Cold)),
+        None => solve_z(&w, Start::Cold),
+    }?;
+    let (mm, zz) = normalize(&m, &sol.z);
+    Ok((mm, zz, sol))
 }
 
 /// MLE from `n = x.len()/d` unit vectors (row-major, each within `UNIT_TOL` of unit norm) with
@@ -124,19 +149,67 @@ pub fn mle_from_samples(d: usize, x: &[f64], w: Option<&[f64]>) -> Result<Bingha
     }
     let mut s = DMatrix::zeros(d, d);
     for k in 0..n {
-        let v = unit_vector(&format!("sample {k}"), d, &x[k * d..(k + 1) * d])?;
+        let v = unit(&format!("sample {k}"), Dyn(d), &x[k * d..(k + 1) * d])?;
         let wk = w.map_or(1.0, |w| w[k]);
         s.ger(wk, &v, &v, 1.0);
     }
     mle_from_second_moment(&s)
 }
 
-/// Solves `ω(z) = target` (ascending, positive, summing to 1) for `z` (ascending, `z_d = 0`).
-/// `start`: an optional initial guess (e.g. the previous filter step).
-pub(crate) fn solve_z(target: &[f64], start: Option<&[f64]>) -> Result<Vec<f64>> {
-    let mut z = vec![0.0; target.len()];
-    solve_z_into(target, start, &mut z)?;
-    Ok(z)
+/// `log F`'s gradient `ω` and Hessian at a point `z` (as the solver sees it: `z[d−1] = 0`).
+/// In a solution returned by [`solve_z`] the Hessian may be that of the previous iterate (see
+/// [`newton`]). `hess` holds the Hessian row-major in its storage (`hess.as_slice()`, as
+/// [`newton`] reads and writes it).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Derivs<D: Dim>
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D>,
+{
+    pub(crate) z: Vector<D>,
+    pub(crate) grad: Vector<D>,
+    pub(crate) hess: Square<D>,
+}
+
+/// Where the moment-matching Newton iteration starts.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Start<'a, D: Dim>
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D>,
+{
+    /// From [`initial_guess`] (each `z_i` from the d = 2 problem of the pair `(i, d)`).
+    Cold,
+    /// From a previous solution with its derivatives (e.g. the filter's previous prediction).
+    Evaluated(&'a Derivs<D>),
+}
+
+/// Solves `ω(z) = target` (ascending, positive) for `z` (`z[d−1] = 0`) with [`newton`].
+/// Returns the solution with its derivatives (the next call's [`Start::Evaluated`]) and the
+/// number of Newton steps; the returned Hessian may be the previous iterate's (see [`newton`]).
+/// Allocation-free for fixed sizes.
+pub(crate) fn solve_z<D: Dim>(target: &Vector<D>, start: Start<'_, D>) -> Result<(Derivs<D>, usize)>
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D>,
+{
+    let (d, _) = target.shape_generic();
+    let (mut sol, from) = match start {
+        Start::Evaluated(prev) => (prev.clone(), NewtonStart::Evaluated),
+        Start::Cold => (
+            Derivs {
+                z: zero_vector(d),
+                grad: zero_vector(d),
+                hess: zeros(d),
+            },
+            NewtonStart::Guess,
+        ),
+    };
+    let steps = newton(
+        target.as_slice(),
+        from,
+        sol.z.as_mut_slice(),
+        sol.grad.as_mut_slice(),
+        sol.hess.as_mut_slice(),
+    )?;
+    Ok((sol, steps))
 }
 
 /// A d×d scratch matrix on the stack for d ≤ 4, on the heap otherwise.
@@ -202,39 +275,11 @@ fn cholesky_solve(k: usize, a: &mut [f64], b: &mut [f64]) -> bool {
     true
 }
 
-/// Allocation-free for d ≤ 4: solves `ω(z) = target` into `z_out`; returns the number of
-/// Newton steps taken. `start`: an optional initial guess (any shift).
-pub(crate) fn solve_z_into(
-    target: &[f64],
-    start: Option<&[f64]>,
-    z_out: &mut [f64],
-) -> Result<usize> {
-    let d = target.len();
-    let mut z = [0.0; MAX_DIM];
-    let mut grad = [0.0; MAX_DIM];
-    let mut hess = Scratch::new(d * d);
-    let from = match start {
-        Some(s) if s.len() == d && s.iter().all(|v| v.is_finite()) => {
-            let top = s[d - 1];
-            for i in 0..d {
-                z[i] = s[i] - top;
-            }
-            NewtonStart::Point
-        }
-        _ => NewtonStart::Guess,
-    };
-    let steps = newton(target, from, &mut z[..d], &mut grad[..d], hess.get())?;
-    z_out.copy_from_slice(&z[..d]);
-    Ok(steps)
-}
-
 /// Where [`newton`] starts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum NewtonStart {
     /// From [`initial_guess`].
     Guess,
-    /// From the point in `z` (`z[d−1] = 0`).
-    Point,
     /// From the point in `z` whose gradient and Hessian are already in `grad` and `hess`.
     Evaluated,
 }
@@ -434,6 +479,116 @@ fn pair_inverse(r: f64) -> f64 {
 /// Number of Newton steps the MLE takes for the target `ω̂` (diagnostics and benchmarks).
 #[doc(hidden)]
 pub fn newton_steps(target: &[f64]) -> Result<usize> {
-    let mut z = vec![0.0; target.len()];
-    solve_z_into(target, None, &mut z)
+    let t = Vector::from_column_slice_generic(Dyn(target.len()), nalgebra::U1, target);
+    Ok(solve_z(&t, Start::Cold)?.1)
+}
+
+impl Bingham {
+    /// Composition `x ⊕ y` of independent `x ~ self`, `y ~ other` (complex multiplication for
+    /// d = 2, Hamilton product for d = 4), approximated by the Bingham with the same second
+    /// moment (exact moment matching: `E[(x⊕y)(x⊕y)ᵀ] = Σ_ab A_ab L_a B L_bᵀ`, then the MLE).
+    pub fn compose(&self, other: &Bingham) -> Result<Bingham> {
+        let d = self.dim();
+        if other.dim() != d || !(d == 2 || d == 4) {
+            return Err(Error::InvalidDimension(format!(
+                "composition is defined for d = 2 (complex) and d = 4 (quaternions) with equal \
+                 dimensions, got {} and {}",
+                d,
+                other.dim()
+            )));
+        }
+        let a = self.second_moment()?;
+        let b = other.second_moment()?;
+        mle_from_second_moment(&compose_moments(&a, &b))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::distribution::log_f_omega;
+    use nalgebra::SVector;
+
+    /// The exact derivatives of `log F` at `z` (as `newton` evaluates them).
+    fn exact_derivs<const D: usize>(z: &SVector<f64, D>) -> Derivs<Const<D>> {
+        let mut d = Derivs {
+            z: *z,
+            grad: SVector::zeros(),
+            hess: Square::zeros_generic(Const::<D>, Const::<D>),
+        };
+        log_normalization_into(
+            z.as_slice(),
+            Method::Exact,
+            Some(d.grad.as_mut_slice()),
+            Some(d.hess.as_mut_slice()),
+        )
+        .unwrap();
+        d
+    }
+
+    fn close(a: f64, b: f64, tol: f64) -> bool {
+        (a - b).abs() <= tol * b.abs().max(1.0)
+    }
+
+    /// The warm start (the filter's: a previous solution whose Hessian may be stale) reaches the
+    /// cold start's solution; restarted at its own solution the solver takes no step.
+    fn warm_start<const D: usize>(z0: [f64; D]) {
+        let z0 = SVector::<f64, D>::from(z0);
+        let (_, w0) = log_f_omega(&z0).unwrap();
+        let (sol, _) = solve_z(&w0, Start::Cold).unwrap();
+        for i in 0..D {
+            assert!(close(sol.z[i], z0[i], 1e-9), "z0 = {z0:?}: {:?}", sol.z);
+        }
+        let (again, steps) = solve_z(&w0, Start::Evaluated(&sol)).unwrap();
+        assert_eq!(steps, 0);
+        assert_eq!(again, sol);
+        let z1 = z0 * 1.3;
+        let (_, w1) = log_f_omega(&z1).unwrap();
+        let (cold, _) = solve_z(&w1, Start::Cold).unwrap();
+        let (warm, _) = solve_z(&w1, Start::Evaluated(&sol)).unwrap();
+        let (exact, _) = solve_z(&w1, Start::Evaluated(&exact_derivs(&sol.z))).unwrap();
+        for i in 0..D {
+            assert!(
+                close(warm.z[i], cold.z[i], 1e-12),
+                "z1 = {z1:?}: warm {:?}",
+                warm.z
+            );
+            assert!(
+                close(exact.z[i], cold.z[i], 1e-12),
+                "z1 = {z1:?}: exact {:?}",
+                exact.z
+            );
+            assert!(
+                close(cold.z[i], z1[i], 1e-9),
+                "z1 = {z1:?}: cold {:?}",
+                cold.z
+            );
+        }
+    }
+
+    #[test]
+    fn warm_start_reaches_the_cold_start_solution() {
+        warm_start([-1.0, 0.0]);
+        warm_start([-150.0, 0.0]);
+        warm_start([-3e7, 0.0]);
+        warm_start([-1.0, -1.0, -1.0, 0.0]);
+        warm_start([-250.0, -180.0, -2.0, 0.0]);
+        warm_start([-1e6, -1e3, -10.0, 0.0]);
+    }
+
+    #[test]
+    fn fixed_and_dynamic_sizes_give_the_same_fit() {
+        let z = SVector::<f64, 4>::from([-250.0, -180.0, -2.0, 0.0]);
+        let (_, w) = log_f_omega(&z).unwrap();
+        let q = crate::quaternion::left(Const::<4>, &[0.5, 0.5, -0.5, 0.5]);
+        let s = crate::matrix::congruence(&q, &w);
+        let (m, zf, _) = fit_second_moment(&s, None).unwrap();
+        let sd = DMatrix::from_column_slice(4, 4, s.as_slice());
+        let (md, zd, _) = fit_second_moment(&sd, None).unwrap();
+        assert_eq!(m.as_slice(), md.as_slice());
+        assert_eq!(zf.as_slice(), zd.as_slice());
+        for i in 0..4 {
+            assert!(close(zf[i], z[i], 1e-9));
+        }
+    }
 }

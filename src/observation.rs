@@ -5,14 +5,15 @@
 //! Conventions: the orientation `q = (w, x, y, z)` (scalar first, unit) maps the sensor frame to
 //! the world frame, `v_world = q ⊗ v_sensor ⊗ q*`, with rotation matrix `R(q)`.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{Const, DMatrix, Matrix4, SVector};
 
 use crate::distribution::Bingham;
 #[allow(unused_imports)] // doc links
 use crate::distribution::UNIT_TOL;
 use crate::error::{Error, Result};
-use crate::fixed::{self, Mat};
+use crate::matrix::sym_eigen;
 use crate::mle::mle_from_second_moment;
+use crate::params::{normalize, unit};
 
 /// Davenport's matrix of a direction pair: the symmetric, traceless 4×4 matrix `K` with
 /// `qᵀ K q = rᵀ R(q) b` for every unit quaternion `q` (scalar first). With `B = b rᵀ`,
@@ -43,7 +44,7 @@ pub fn davenport_matrix(body: &[f64; 3], reference: &[f64; 3]) -> [[f64; 4]; 4] 
 /// Checks that `v` has length 3, is finite and has unit norm within [`UNIT_TOL`]; returns it
 /// normalized.
 pub fn check_direction(what: &str, v: &[f64]) -> Result<[f64; 3]> {
-    fixed::unit::<3>(what, v)
+    Ok(unit(what, Const::<3>, v)?.into())
 }
 
 /// Checks a von Mises–Fisher concentration: finite, `≥ 0`, and `2κ` finite.
@@ -59,10 +60,13 @@ pub fn check_kappa(kappa: f64) -> Result<f64> {
 }
 
 /// `κ K` for a validated pair: the exponent matrix of the likelihood `exp(qᵀ κK q)`.
-pub(crate) fn observation_exponent(body: &[f64; 3], reference: &[f64; 3], kappa: f64) -> Mat<4> {
-    let mut k = davenport_matrix(body, reference);
-    k.iter_mut().flatten().for_each(|v| *v *= kappa);
-    k
+pub(crate) fn observation_exponent(
+    body: &[f64; 3],
+    reference: &[f64; 3],
+    kappa: f64,
+) -> Matrix4<f64> {
+    let k = davenport_matrix(body, reference);
+    Matrix4::from_fn(|i, j| k[i][j] * kappa)
 }
 
 /// The likelihood of a measured direction as a Bingham density in the orientation.
@@ -80,18 +84,11 @@ pub fn vector_observation(body: &[f64], reference: &[f64], kappa: f64) -> Result
     let r = check_direction("reference", reference)?;
     let kappa = check_kappa(kappa)?;
     // Ascending eigenvalues: −1, −1, 1, 1 exactly (the decomposition only rounds them).
-    let (v, _) = fixed::sym_eigen(&davenport_matrix(&b, &r))?;
-    let z = [-2.0 * kappa, -2.0 * kappa, 0.0, 0.0];
-    let (m, z) = fixed::normalize(&v, &z);
-    Ok(bingham_from_fixed(&m, &z))
-}
-
-/// A [`Bingham`] from normalized fixed-size parts.
-pub(crate) fn bingham_from_fixed<const D: usize>(m: &Mat<D>, z: &[f64; D]) -> Bingham {
-    Bingham::from_parts_unchecked(
-        DMatrix::from_fn(D, D, |i, j| m[i][j]),
-        DVector::from_column_slice(z),
-    )
+    let k = davenport_matrix(&b, &r);
+    let (v, _) = sym_eigen(&Matrix4::from_fn(|i, j| k[i][j]))?;
+    let z = SVector::<f64, 4>::new(-2.0 * kappa, -2.0 * kappa, 0.0, 0.0);
+    let (m, z) = normalize(&v, &z);
+    Ok(Bingham::from_normalized_parts(&m, &z))
 }
 
 /// `log C(κ)` of the von Mises–Fisher density on the unit sphere S² (surface measure):

@@ -1,25 +1,98 @@
 //! Composition `x ⊕ y = L(x) y = R(y) x` for d = 2 (complex numbers `(re, im)`) and d = 4
-//! (quaternions, scalar first `(w, x, y, z)`, Hamilton product).
+//! (quaternions, scalar first `(w, x, y, z)`, Hamilton product), and the second moment of a
+//! composition.
 //!
-//! The matrix helpers take slices of length 2 or 4 (callers check); other lengths give an
-//! empty matrix.
+//! The products use the multiplication tables of ℂ and ℍ: `L(x)_{ik} = s_{ik} x_{i⊻k}` with the
+//! sign tables below (`⊻` is bitwise xor), so `x ⊕ y = L(x) y`, `x ⊕ u = R(u) x` with
+//! `R(u)_{ij} = s_{i,i⊻j} u_{i⊻j}`, and the basis matrices `L_a = L(e_a)` are signed
+//! permutations: `(L_a)_{i,i⊻a} = s_{i,i⊻a}`. The crate-internal functions are generic over the
+//! dimension type (see the `matrix` module); the public matrix helpers take slices of length 2 or 4
+//! (callers check); other lengths give an empty matrix.
 
-use nalgebra::DMatrix;
+// Index loops mirror the matrix formulas more clearly than iterators.
+#![allow(clippy::needless_range_loop)]
+
+use nalgebra::allocator::Allocator;
+use nalgebra::{DMatrix, DefaultAllocator, Dim, Dyn};
+
+use crate::matrix::{symmetrize, zeros, Square};
+
+/// Signs of `L(x)` for complex numbers: `L(x) = [[x0, −x1], [x1, x0]]`.
+const SIGN2: [[f64; 2]; 2] = [[1.0, -1.0], [1.0, 1.0]];
+/// Signs of `L(x)` for quaternions (scalar first), see [`left_matrix`].
+const SIGN4: [[f64; 4]; 4] = [
+    [1.0, -1.0, -1.0, -1.0],
+    [1.0, 1.0, -1.0, 1.0],
+    [1.0, 1.0, 1.0, -1.0],
+    [1.0, -1.0, 1.0, 1.0],
+];
+
+/// `s_{ik}`: the sign of `x_{i⊻k}` in row `i`, column `k` of `L(x)` (`n` = 2 or 4).
+#[inline(always)]
+fn sign(n: usize, i: usize, k: usize) -> f64 {
+    if n == 2 {
+        SIGN2[i][k]
+    } else {
+        SIGN4[i][k]
+    }
+}
+
+/// Panics unless `n` is 2 or 4 (a programming error: callers check the dimension).
+#[inline(always)]
+fn assert_dim(n: usize) {
+    assert!(n == 2 || n == 4, "products exist for d = 2 and 4");
+}
+
+/// `L(x)`, with `x ⊕ y = L(x) y` (`x` of length 2 or 4).
+pub(crate) fn left<D: Dim>(d: D, x: &[f64]) -> Square<D>
+where
+    DefaultAllocator: Allocator<D, D>,
+{
+    let n = d.value();
+    assert_dim(n);
+    Square::from_fn_generic(d, d, |i, k| sign(n, i, k) * x[i ^ k])
+}
+
+/// `R(u)`, with `x ⊕ u = R(u) x` (`u` of length 2 or 4).
+pub(crate) fn right<D: Dim>(d: D, u: &[f64]) -> Square<D>
+where
+    DefaultAllocator: Allocator<D, D>,
+{
+    let n = d.value();
+    assert_dim(n);
+    Square::from_fn_generic(d, d, |i, j| sign(n, i, i ^ j) * u[i ^ j])
+}
+
+/// `Σ_ab A_ab L_a B L_bᵀ`: the second moment of `x ⊕ y` for independent `x`, `y` with second
+/// moments `A`, `B` (d = 2 or 4; symmetrized).
+pub(crate) fn compose_moments<D: Dim>(a: &Square<D>, b: &Square<D>) -> Square<D>
+where
+    DefaultAllocator: Allocator<D, D>,
+{
+    let (d, _) = a.shape_generic();
+    let n = d.value();
+    assert_dim(n);
+    let mut c = zeros(d);
+    for i in 0..n {
+        for j in 0..n {
+            let mut t = 0.0;
+            for x in 0..n {
+                let (ix, sx) = (i ^ x, sign(n, i, i ^ x));
+                for y in 0..n {
+                    let jy = j ^ y;
+                    t += a[(x, y)] * sx * sign(n, j, jy) * b[(ix, jy)];
+                }
+            }
+            c[(i, j)] = t;
+        }
+    }
+    symmetrize(&c)
+}
 
 /// `L(x)` with `x ⊕ y = L(x) y` (`x.len()` 2 or 4).
 pub fn left_matrix(x: &[f64]) -> DMatrix<f64> {
     match x.len() {
-        2 => DMatrix::from_row_slice(2, 2, &[x[0], -x[1], x[1], x[0]]),
-        4 => DMatrix::from_row_slice(
-            4,
-            4,
-            &[
-                x[0], -x[1], -x[2], -x[3], //
-                x[1], x[0], -x[3], x[2], //
-                x[2], x[3], x[0], -x[1], //
-                x[3], -x[2], x[1], x[0],
-            ],
-        ),
+        2 | 4 => left(Dyn(x.len()), x),
         _ => DMatrix::zeros(0, 0),
     }
 }
@@ -27,17 +100,7 @@ pub fn left_matrix(x: &[f64]) -> DMatrix<f64> {
 /// `R(u)` with `x ⊕ u = R(u) x` (`u.len()` 2 or 4).
 pub fn right_matrix(u: &[f64]) -> DMatrix<f64> {
     match u.len() {
-        2 => left_matrix(u),
-        4 => DMatrix::from_row_slice(
-            4,
-            4,
-            &[
-                u[0], -u[1], -u[2], -u[3], //
-                u[1], u[0], u[3], -u[2], //
-                u[2], -u[3], u[0], u[1], //
-                u[3], u[2], -u[1], u[0],
-            ],
-        ),
+        2 | 4 => right(Dyn(u.len()), u),
         _ => DMatrix::zeros(0, 0),
     }
 }
@@ -166,5 +229,98 @@ pub mod q4 {
         };
         let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
         [q[0] / n, q[1] / n, q[2] / n, q[3] / n]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Const, SMatrix, SVector};
+
+    fn xorshift(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed;
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
+    fn unit_random<const D: usize>(r: &mut impl FnMut() -> f64) -> SVector<f64, D> {
+        SVector::<f64, D>::from_fn(|_, _| r()).normalize()
+    }
+
+    /// The sign tables against the written-out products of `q4` and the definitions.
+    fn products<const D: usize>() {
+        let mut r = xorshift(7 + D as u64);
+        for _ in 0..50 {
+            let x = unit_random::<D>(&mut r);
+            let y = unit_random::<D>(&mut r);
+            let (lf, rf) = (
+                left(Const::<D>, x.as_slice()),
+                right(Const::<D>, y.as_slice()),
+            );
+            let p = lf * y;
+            let rx = rf * x;
+            let q: Vec<f64> = if D == 4 {
+                let a = [x[0], x[1], x[2], x[3]];
+                let b = [y[0], y[1], y[2], y[3]];
+                q4::mul(&a, &b).to_vec()
+            } else {
+                vec![x[0] * y[0] - x[1] * y[1], x[0] * y[1] + x[1] * y[0]]
+            };
+            for i in 0..D {
+                assert!((p[i] - q[i]).abs() < 1e-15);
+                assert!((rx[i] - q[i]).abs() < 1e-15);
+            }
+            assert_eq!(compose(x.as_slice(), y.as_slice()).unwrap(), p.as_slice());
+        }
+    }
+
+    #[test]
+    fn product_tables_match_the_products() {
+        products::<2>();
+        products::<4>();
+        assert_eq!(left_matrix(&[1.0, 2.0, 3.0]).len(), 0);
+        assert!(compose(&[1.0, 0.0], &[1.0, 0.0, 0.0, 0.0]).is_none());
+    }
+
+    /// The second moment of `x ⊕ y` against its definition `E[L(x) y yᵀ L(x)ᵀ]` with `x`, `y`
+    /// taking finitely many values (weights `p`, `q`): `A = Σ p_k x_k x_kᵀ`, `B` likewise.
+    fn composed_moment<const D: usize>() {
+        let mut r = xorshift(11 + D as u64);
+        for _ in 0..10 {
+            let xs: Vec<SVector<f64, D>> = (0..3).map(|_| unit_random::<D>(&mut r)).collect();
+            let ys: Vec<SVector<f64, D>> = (0..3).map(|_| unit_random::<D>(&mut r)).collect();
+            let p = [0.2, 0.3, 0.5];
+            let q = [0.6, 0.1, 0.3];
+            let mut a = SMatrix::<f64, D, D>::zeros();
+            let mut b = SMatrix::<f64, D, D>::zeros();
+            let mut expect = SMatrix::<f64, D, D>::zeros();
+            for (k, x) in xs.iter().enumerate() {
+                a += x * x.transpose() * p[k];
+                for (l, y) in ys.iter().enumerate() {
+                    let xy = left(Const::<D>, x.as_slice()) * y;
+                    expect += xy * xy.transpose() * (p[k] * q[l]);
+                }
+            }
+            for (l, y) in ys.iter().enumerate() {
+                b += y * y.transpose() * q[l];
+            }
+            let c = compose_moments(&a, &b);
+            assert!((c - expect).amax() < 1e-15, "d = {D}");
+            let cd = compose_moments(
+                &DMatrix::from_column_slice(D, D, a.as_slice()),
+                &DMatrix::from_column_slice(D, D, b.as_slice()),
+            );
+            assert_eq!(cd.as_slice(), c.as_slice());
+        }
+    }
+
+    #[test]
+    fn composition_of_moments_is_the_moment_of_the_composition() {
+        composed_moment::<2>();
+        composed_moment::<4>();
     }
 }

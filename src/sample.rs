@@ -1,5 +1,5 @@
-//! Exact rejection sampling (Kent, Ganeiber & Mardia 2013) with an angular central Gaussian
-//! envelope; needs no normalization constant.
+//! [`Bingham::sample`]: exact rejection sampling (Kent, Ganeiber & Mardia 2013) with an angular
+//! central Gaussian envelope; needs no normalization constant.
 //!
 //! With `A = −M Z Mᵀ` (eigenvalues `λ_i = −z_i ≥ 0`) the target is `f*(x) = exp(−xᵀAx)`, the
 //! envelope `g*(x) = (xᵀΩx)^{−d/2}` with `Ω = I + 2A/b`, where `b` solves
@@ -10,8 +10,16 @@ use rand::Rng;
 
 use crate::distribution::Bingham;
 
+impl Bingham {
+    /// Draws `n` independent samples (unit vectors) by exact rejection sampling from an angular
+    /// central Gaussian envelope (Kent, Ganeiber & Mardia 2013). Deterministic for a seeded `rng`.
+    pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R, n: usize) -> Vec<DVector<f64>> {
+        Sampler::new(self).sample(rng, n)
+    }
+}
+
 /// A prepared sampler for one distribution.
-pub(crate) struct Sampler<'a> {
+struct Sampler<'a> {
     dist: &'a Bingham,
     lambda: Vec<f64>,
     /// standard deviations of the envelope's Gaussian in the eigenbasis: (1 + 2λ/b)^{−1/2}
@@ -21,7 +29,7 @@ pub(crate) struct Sampler<'a> {
 }
 
 impl<'a> Sampler<'a> {
-    pub(crate) fn new(dist: &'a Bingham) -> Self {
+    fn new(dist: &'a Bingham) -> Self {
         let d = dist.dim();
         // λ is capped at 1e300: beyond about 9e307, 2λ/b overflows (b ≥ 1), the envelope's sd
         // becomes 0 and (1 + 2λ/b)·c² = ∞·0 = NaN fails every acceptance test, so the loop never
@@ -92,7 +100,7 @@ impl<'a> Sampler<'a> {
         }
     }
 
-    pub(crate) fn sample<R: Rng + ?Sized>(&self, rng: &mut R, n: usize) -> Vec<DVector<f64>> {
+    fn sample<R: Rng + ?Sized>(&self, rng: &mut R, n: usize) -> Vec<DVector<f64>> {
         let d = self.dist.dim();
         let mut c = vec![0.0; d];
         (0..n)
