@@ -298,6 +298,26 @@ fn d8_three_dimensional_references() {
     );
 }
 
+/// The ladder `z_i = −10(d − 1 − i)`, d = 8 and 5, of `benches/general.rs` (the slowest quadrature
+/// convergence among its cases: the image of the saddle between the two smallest `λ` lies 0.26
+/// from the real `w` axis).
+#[test]
+fn benchmark_ladders_against_nested_sphere_quadrature() {
+    use Atom::{Equal, Pair};
+    let cases: Vec<Vec<Atom>> = vec![
+        vec![
+            Pair(-70.0, -60.0),
+            Pair(-50.0, -40.0),
+            Pair(-30.0, -20.0),
+            Pair(-10.0, 0.0),
+        ],
+        vec![Pair(-40.0, -30.0), Pair(-20.0, -10.0), Equal(0.0, 1)],
+    ];
+    for atoms in cases {
+        check_against_nested(&atoms, 1.0 / 12.0, 1e-13);
+    }
+}
+
 #[test]
 fn huge_and_mixed_scales_against_nested_sphere_quadrature() {
     use Atom::{Equal, Pair};
