@@ -43,6 +43,7 @@
 //! state (or the noise) is sharp.
 
 use nalgebra::{Const, Matrix4, SMatrix, SVector};
+use std::sync::OnceLock;
 
 use crate::distribution::{bayes_product, log_f_omega, product_eigen_precision, Bingham};
 use crate::error::{Error, Result};
@@ -295,9 +296,10 @@ struct Noise<const D: usize> {
     z: Vect<D>,
     /// Process noise: the second moment (of the capped concentrations). Measurement noise: unused.
     moment: Mat<D>,
-    /// Measurement noise: `log F(z)` (NaN if it could not be evaluated: only
-    /// `log_likelihood` needs it, the update does not). Process noise: unused.
-    log_f: f64,
+    /// Measurement noise: `log F(z)`, evaluated on the first `log_likelihood` (NaN if it could
+    /// not be evaluated; the update does not need it, so it neither pays for it nor fails on
+    /// it). Process noise: unused.
+    log_f: OnceLock<f64>,
 }
 
 /// Which quantities a noise entry carries.
@@ -350,22 +352,18 @@ impl<const D: usize> NoiseCache<D> {
             Role::Process => params_row_major(Const::<D>, "m_w", m, "z_w", z)?,
             Role::Measurement => params_row_major(Const::<D>, "m_v", m, "z_v", z)?,
         };
-        let (moment, log_f) = match role {
+        let moment = match role {
             Role::Process => {
                 let (_, w) = log_f_omega(&capped(&zz))?;
-                (congruence(&mm, &w), 0.0)
+                congruence(&mm, &w)
             }
-            // The Bayes product does not need log F: an update must not fail on it.
-            Role::Measurement => (
-                Mat::<D>::zeros(),
-                log_f_omega(&zz).map_or(f64::NAN, |r| r.0),
-            ),
+            Role::Measurement => Mat::<D>::zeros(),
         };
         Ok(Noise {
             m: mm,
             z: zz,
             moment,
-            log_f,
+            log_f: OnceLock::new(),
         })
     }
 
@@ -496,14 +494,17 @@ impl<const D: usize> Core<D> {
                 &built
             }
         };
-        if !noise.log_f.is_finite() {
+        let log_f_noise = *noise
+            .log_f
+            .get_or_init(|| log_f_omega(&noise.z).map_or(f64::NAN, |r| r.0));
+        if !log_f_noise.is_finite() {
             return Err(Error::Numerical(
                 "log-likelihood: log F of the measurement noise is not finite".into(),
             ));
         }
         let ml = Self::likelihood_m(&zhat, &noise.m);
         let p = congruence(&ml, &noise.z);
-        let value = self.log_likelihood_precision(&p)? - noise.log_f;
+        let value = self.log_likelihood_precision(&p)? - log_f_noise;
         if !value.is_finite() {
             return Err(Error::Numerical(format!(
                 "log-likelihood is not finite ({value})"
