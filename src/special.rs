@@ -3,7 +3,8 @@
 //! `i0e(x) = e^{-|x|} I0(x)`, `i1e(x) = e^{-|x|} I1(x)`, the difference
 //! `e^{-x} (I0(x) - I1(x))` computed without cancellation, and
 //! `Q(x) = e^{-x} (3 I0(x) - 4 I1(x) + I2(x))` (for Hessians). [`i01e`] returns the first three
-//! at once; it is the function the quadrature rules of the normalization constant call at every node.
+//! at once; the quadrature rules of the normalization constant evaluate the same fits at several
+//! nodes at once (the crate-internal `lanes`).
 //!
 //! # Method
 //!
@@ -36,6 +37,12 @@
 //!
 //! Speed: `i01e` takes about 10 ns for `x < 128` and 7.5 ns beyond (best of repeated runs of 1024
 //! calls on the 2-core AMD EPYC development VM; `benches/special.rs` measures it with criterion).
+//!
+//! The crate-internal module `lanes` evaluates the same fits and series for several arguments at once (SIMD), for the
+//! quadrature of the normalization constant; its results equal these functions' (bit for bit
+//! without fused multiply-adds, to rounding with them).
+
+pub(crate) mod lanes;
 
 /// Coefficients of one function on one piece: `f(c + t) = hi + (lo + t·g(t))`, `g(t) = Σ q[k] t^k`.
 #[derive(Clone, Copy)]
@@ -176,9 +183,9 @@ pub fn i0e_minus_i1e(x: f64) -> f64 {
 /// `(i0e(x), i1e(x), i0e_minus_i1e(x))` at once, sharing all work; meant for `x ≥ 0`.
 ///
 /// The three values are bit-for-bit those of [`i0e`], [`i1e`] and [`i0e_minus_i1e`]; for negative
-/// `x` that means `i0e(|x|)`, `−i1e(|x|)` and `i0e_minus_i1e(|x|)`. This is the hot function of the
-/// d = 3, 4 normalization-constant quadrature: a table lookup and one two-lane degree-9 polynomial
-/// for `x < 128`; one division, one square root and one two-lane series beyond.
+/// `x` that means `i0e(|x|)`, `−i1e(|x|)` and `i0e_minus_i1e(|x|)`. A table lookup and one
+/// two-lane degree-9 polynomial for `x < 128`; one division, one square root and one two-lane
+/// series beyond.
 #[inline]
 #[must_use]
 pub fn i01e(x: f64) -> (f64, f64, f64) {

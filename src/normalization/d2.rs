@@ -7,22 +7,23 @@
 //! `Q = e^{−x}(3I0 − 4I1 + I2)` (evaluated without cancellation); the rest of the Hessian of
 //! `log F` follows from `ω1 + ω2 = 1`.
 //!
-//! Range: every Bessel value is taken times the exact factor `k = 2^⌊log2 √x⌋`
-//! ([`crate::special::i01e_times`]), which keeps `I0e − I1e ≈ x^{−3/2}/5` and `Q ≈ x^{−5/2}` from
-//! underflowing; `ω1 ≈ 1/(4x)` keeps its relative accuracy for every finite `z1`, and `H` until
-//! it drops below the smallest double (`|z1| ≳ 1e154`). For `x ≤ 1` (`k = 1`) and for `x < 128`
-//! (`k` a power of two) the results are bit-for-bit those of the unscaled formulas.
+//! Range: for `x ≥ 128` every Bessel value is taken times the exact factor `k = 2^⌊e/2⌋`
+//! (`e` the binary exponent of `x`, so `k ≈ √x`; [`crate::special::i01e_times`]), which keeps
+//! `I0e − I1e ≈ x^{−3/2}/5` and `Q ≈ x^{−5/2}` from underflowing; `ω1 ≈ 1/(4x)` keeps its
+//! relative accuracy for every finite `z1`, and `H` until it drops below the smallest double
+//! (`|z1| ≳ 1e154`). Below 128 nothing underflows and `k = 1`. The outputs are ratios of values
+//! scaled by the same power of two, so they do not depend on `k`.
 
 use crate::error::Result;
-use crate::special::{bessel_q_times, i01e_times, pow2_floor};
+use crate::special::{bessel_q_times, i01e_times};
 
 /// `(i0e, ω1, ω2, E[x1⁴])` at `x = −z1/2 ≥ 0`, every value formed from Bessel functions
-/// scaled by `k = 2^⌊log2 √x⌋` (an exact factor), so that nothing underflows for any finite
-/// `x`: `i0e ≈ (2πx)^{−1/2}` and `ω1 ≈ 1/(4x)` are representable down to the smallest
+/// scaled by `k ≈ √x` (an exact power of two; 1 below 128), so that nothing underflows for any
+/// finite `x`: `i0e ≈ (2πx)^{−1/2}` and `ω1 ≈ 1/(4x)` are representable down to the smallest
 /// `x^{−1}`, but `i0e − i1e ≈ x^{−3/2}/5` is not.
 #[inline(always)]
 fn scaled(x: f64, fourth: bool) -> (f64, f64, f64, f64) {
-    let k = if x > 1.0 { pow2_floor(x.sqrt()) } else { 1.0 };
+    let k = if x < 128.0 { 1.0 } else { pow2_floor_sqrt(x) };
     let (ki0, ki1, kdm, _) = i01e_times(x, k);
     let w1 = kdm / (2.0 * ki0);
     let w2 = (ki0 + ki1) / (2.0 * ki0);
@@ -32,6 +33,14 @@ fn scaled(x: f64, fourth: bool) -> (f64, f64, f64, f64) {
         0.0
     };
     (ki0 / k, w1, w2, e11)
+}
+
+/// A power of two within a factor 2 of `√x` for `x ≥ 1` finite: `2^⌊e/2⌋`, `e` the exponent of
+/// `x` (bit operations only; any such power of two serves as the exact scale factor `k`).
+#[inline(always)]
+fn pow2_floor_sqrt(x: f64) -> f64 {
+    let e = (x.to_bits() >> 52) as i64 - 1023;
+    f64::from_bits(((e / 2 + 1023) as u64) << 52)
 }
 
 /// Sorted evaluation (see `SortedEval`): `z = [z1, 0]`, `z1 ≤ 0`.

@@ -14,7 +14,64 @@ mod quad;
 pub use quad::{log_f_sorted_fine, log_f_sorted_tuned};
 mod saddlepoint;
 
+use std::sync::OnceLock;
+
 use crate::error::{check_dim, check_finite, Error, Result, MAX_DIM};
+
+/// The compiled kernel that evaluates the d = 3, 4 quadrature nodes (several at a time, see
+/// `quad.rs`). [`Path::detected`] picks the one every evaluation uses, once per process; the
+/// others exist for tests and benchmarks ([`log_f_with_path`]). All paths agree to rounding
+/// (they differ only in fused versus separate multiply-adds, `tests/dispatch.rs`); each is
+/// deterministic: the same input gives the same bits on every call and thread.
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Path {
+    /// Plain arithmetic on the target's baseline instruction set (SSE2 on x86-64, NEON on
+    /// aarch64), 4 lanes.
+    Portable,
+    /// x86-64 with AVX2 and FMA, 4 lanes.
+    Avx2,
+    /// x86-64 with AVX-512 (F, VL, DQ), AVX2 and FMA, 8 lanes. Not chosen by [`Path::detected`]:
+    /// measured 10–30 % slower than `Avx2` on the AMD Zen 4 development machine, whose 512-bit
+    /// operations take two 256-bit passes (`benches/normalization.rs`, group `d4_path`).
+    Avx512,
+}
+
+impl Path {
+    /// Every path, available or not.
+    pub const ALL: [Path; 3] = [Path::Portable, Path::Avx2, Path::Avx512];
+
+    /// Whether this CPU can run the path.
+    pub fn available(self) -> bool {
+        match self {
+            Path::Portable => true,
+            #[cfg(target_arch = "x86_64")]
+            Path::Avx2 => is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"),
+            #[cfg(target_arch = "x86_64")]
+            Path::Avx512 => {
+                Path::Avx2.available()
+                    && is_x86_feature_detected!("avx512f")
+                    && is_x86_feature_detected!("avx512vl")
+                    && is_x86_feature_detected!("avx512dq")
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => false,
+        }
+    }
+
+    /// The path every evaluation uses, detected on first use: `Avx2` where the CPU has AVX2 and
+    /// FMA, else `Portable`.
+    pub fn detected() -> Path {
+        static BEST: OnceLock<Path> = OnceLock::new();
+        *BEST.get_or_init(|| {
+            if Path::Avx2.available() {
+                Path::Avx2
+            } else {
+                Path::Portable
+            }
+        })
+    }
+}
 
 /// How to evaluate the normalization constant.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -50,8 +107,7 @@ fn sorted_eval(d: usize, method: Method) -> SortedEval {
     match (method, d) {
         (Method::Saddlepoint, _) => saddlepoint::log_f_sorted,
         (Method::Exact, 2) => d2::log_f_sorted,
-        (Method::Exact, 3) => quad::log_f_sorted_d3,
-        (Method::Exact, 4) => quad::log_f_sorted_d4,
+        (Method::Exact, 3 | 4) => |z, g, h| quad::log_f_sorted_on(Path::detected(), z, g, h),
         (Method::Exact, _) => general::log_f_sorted,
     }
 }
@@ -64,6 +120,35 @@ fn sorted_eval(d: usize, method: Method) -> SortedEval {
 pub fn log_normalization_into(
     z: &[f64],
     method: Method,
+    grad: Option<&mut [f64]>,
+    hess: Option<&mut [f64]>,
+) -> Result<f64> {
+    log_normalization_on(z, method, Path::detected(), grad, hess)
+}
+
+/// [`log_normalization_into`] with the exact method and the d = 3, 4 quadrature on the given
+/// kernel (for tests and benchmarks; other d ignore `path`). Errors as
+/// [`log_normalization_into`], and `InvalidArgument` if the CPU cannot run `path`.
+#[doc(hidden)]
+pub fn log_f_with_path(
+    z: &[f64],
+    path: Path,
+    grad: Option<&mut [f64]>,
+    hess: Option<&mut [f64]>,
+) -> Result<f64> {
+    if !path.available() {
+        return Err(Error::InvalidArgument(format!(
+            "path {path:?} is not available on this CPU"
+        )));
+    }
+    log_normalization_on(z, Method::Exact, path, grad, hess)
+}
+
+/// [`log_normalization_into`] with the d = 3, 4 kernel `path` (available on this CPU).
+fn log_normalization_on(
+    z: &[f64],
+    method: Method,
+    path: Path,
     grad: Option<&mut [f64]>,
     hess: Option<&mut [f64]>,
 ) -> Result<f64> {
@@ -80,15 +165,45 @@ pub fn log_normalization_into(
             "Hessian buffer length must be d*d".into(),
         ));
     }
-    // Sort ascending, remembering where each sorted entry came from.
-    let mut perm = [0usize; MAX_DIM];
+    // small d (the filter's hot path) on small stack arrays, without heap allocation
+    if d <= 4 {
+        sorted_call::<4>(z, method, path, grad, hess)
+    } else {
+        sorted_call::<MAX_DIM>(z, method, path, grad, hess)
+    }
+}
+
+/// Sorts and shifts `z` (`d ≤ N`, validated), evaluates, and writes the derivatives back in
+/// input order.
+#[inline(always)]
+fn sorted_call<const N: usize>(
+    z: &[f64],
+    method: Method,
+    path: Path,
+    grad: Option<&mut [f64]>,
+    hess: Option<&mut [f64]>,
+) -> Result<f64> {
+    let d = z.len();
+    // Sort ascending (stable), remembering where each sorted entry came from.
+    let mut perm = [0usize; N];
     for (i, p) in perm.iter_mut().enumerate().take(d) {
         *p = i;
     }
     let perm = &mut perm[..d];
-    perm.sort_by(|&a, &b| z[a].total_cmp(&z[b]));
+    if N <= 4 {
+        // insertion sort: a handful of comparisons, the order of `sort_by`
+        for i in 1..d {
+            let mut k = i;
+            while k > 0 && z[perm[k]].total_cmp(&z[perm[k - 1]]).is_lt() {
+                perm.swap(k, k - 1);
+                k -= 1;
+            }
+        }
+    } else {
+        perm.sort_by(|&a, &b| z[a].total_cmp(&z[b]));
+    }
     let shift = z[perm[d - 1]];
-    let mut zs = [0.0f64; MAX_DIM];
+    let mut zs = [0.0f64; N];
     for (k, &p) in perm.iter().enumerate() {
         zs[k] = z[p] - shift;
     }
@@ -103,13 +218,16 @@ pub fn log_normalization_into(
                 .into(),
         ));
     }
-    let eval = sorted_eval(d, method);
-    let mut gs = [0.0f64; MAX_DIM];
+    let eval = |zs: &[f64], g: Option<&mut [f64]>, h: Option<&mut [f64]>| match (method, d) {
+        (Method::Exact, 2) => d2::log_f_sorted(zs, g, h),
+        (Method::Exact, 3 | 4) => quad::log_f_sorted_on(path, zs, g, h),
+        _ => sorted_eval(d, method)(zs, g, h),
+    };
+    let mut gs = [0.0f64; N];
     let want_grad = grad.is_some();
     let log_f = match hess {
         None => eval(zs, want_grad.then_some(&mut gs[..d]), None)?,
         Some(h) => {
-            // no heap allocation for d ≤ 4 (the filter's hot path)
             let mut small = [0.0f64; 16];
             let mut big = Vec::new();
             let hs: &mut [f64] = if d <= 4 {

@@ -17,10 +17,11 @@
 //!
 //! Numerics: the two halves `u ∈ [0, ½]` and `u ∈ [½, 1]` are integrated in `v = √u` and
 //! `s = √(1−u)`, which removes the `r^{−1/2}` behaviour of both factors at the ends; the
-//! boundary layers (width `1/|z|` in `u`) are resolved by Gauss–Legendre panels graded
-//! geometrically from the smallest feature scale. The exponential factor `e^{u z}` is cut where
-//! it drops below `e^{−50}` (a relative truncation error below 1e-18, see `Layout::trunc`). The rule's
-//! error is measured against 65-digit references (`tests/data`); the figures are in
+//! boundary layers (width `1/|z|` in `u`) are resolved by 20-point Gauss–Legendre panels graded
+//! from the smallest feature scale, with a ratio that grows from panel to panel (see `LAYOUT`:
+//! 59 nodes on average for d = 4, 43 for d = 3). The exponential factor `e^{u z}` is cut where
+//! it drops below `e^{−40}` (a relative truncation error of about 4e-18, see `Layout::trunc`).
+//! The rule's error is measured against 65-digit references (`tests/data`); the figures are in
 //! `docs/accuracy.md`. Hessian entries are less accurate than `ω` (relative to the scale of their
 //! row): a covariance `E[x_i² x_j²] − ω_i ω_j` of nearly independent coordinates cancels digits.
 //! The MLE's accuracy depends on `ω` only; the Hessian only steers its Newton steps.
@@ -38,10 +39,21 @@
 //! `1/√β ≪ t_max`. Checked against 65-digit references at |z| = 1e10, 1e100, 1e300
 //! (`tests/data/normalization_extreme.csv`) and against the two-Gaussian asymptote for all
 //! |z_i| ≥ 1e20 (`tests/totality.rs`); figures in `docs/accuracy.md`.
+//!
+//! Evaluation: the nodes of a panel are taken 4 or 8 at a time (a batch of lanes), and every
+//! step — Bessel fits ([`crate::special::lanes`]), exponentials, moment products, sums — is the
+//! same operation on all lanes, written as plain Rust on fixed-size arrays that the compiler
+//! turns into SIMD instructions. The kernel ([`half`]) is compiled three times: for AVX2 + FMA,
+//! for AVX-512, and for the target's baseline (SSE2 on x86-64, NEON on aarch64); [`half_on`]
+//! runs the one [`Path::detected`] chose at run time (the only `unsafe` of the module: calling
+//! a function compiled for CPU features the detection found). Lane sums are added in lane
+//! order at the end of a half, so a result depends on the input and the path only.
 
 use super::gauss::gauss_legendre_unit;
+use super::Path;
 use crate::error::Result;
-use crate::special::{bessel_q_times, i01e_times, pow2_floor};
+use crate::special::lanes::{self, Arith, Fused, Plain, F};
+use crate::special::pow2_floor;
 
 /// Panel layout of the composite rule.
 #[derive(Clone, Copy, Debug)]
@@ -56,24 +68,60 @@ pub(crate) struct Layout {
     pub trunc: f64,
     /// Largest panel width in units of the Gaussian scale `1/√|z|` of `e^{u z} = e^{v² z}`.
     pub kappa: f64,
+    /// Growth of the grading ratio from one panel to the next (1: constant `rho`).
+    pub grow: f64,
+}
+
+/// A Gauss–Legendre rule on `[0, 1]`, its nodes and weights padded with zero-weight nodes to a
+/// multiple of 8 (the most lanes a batch has), so that a panel is a whole number of batches.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Rule {
+    x: &'static [f64],
+    w: &'static [f64],
+    /// the rule's order (nodes per panel without the padding)
+    n: usize,
+}
+
+/// The `N`-point rule padded to `P` nodes (`P ≥ N` a multiple of 8; padding: node ½, weight 0).
+const fn padded<const N: usize, const P: usize>() -> ([f64; P], [f64; P]) {
+    assert!(P >= N && P % 8 == 0);
+    let (x, w) = gauss_legendre_unit::<N>();
+    let mut px = [0.5; P];
+    let mut pw = [0.0; P];
+    let mut i = 0;
+    while i < N {
+        px[i] = x[i];
+        pw[i] = w[i];
+        i += 1;
+    }
+    (px, pw)
 }
 
 /// Gauss–Legendre order per panel of the production rule.
 const N: usize = 20;
-const RULE: ([f64; N], [f64; N]) = gauss_legendre_unit::<N>();
-/// The production layout.
-/// Chosen by measurement against the fine rule over 20 000 random z in [−1e6, 0]^d (max
-/// |Δ log F| 6e-15, max relative Δω 8e-15, ~106 nodes on average for d = 4). Since the far
-/// half is no longer graded by group 1's rate (see `half`): over 40 000 other random z
-/// (d = 3, 4; |z_i| from 1e-3 to 1e6, ties, zeros, moderate z) max |Δ log F| 8.0e-15 and
-/// relative Δω 9.9e-15 against the fine rule as it was before that change, 85 nodes on
-/// average for d = 4 (92 before); (−1e6, −10, −1, 0) takes 120 nodes instead of 140.
+static RULE_NODES: ([f64; 24], [f64; 24]) = padded::<N, 24>();
+static RULE: Rule = Rule {
+    x: &RULE_NODES.0,
+    w: &RULE_NODES.1,
+    n: N,
+};
+/// The production layout, chosen by measurement against the fine rule ([`log_f_sorted_fine`];
+/// `log_f_sorted_tuned` runs other layouts): over 40 000 random z (d = 3, 4; |z_i| from 1e-3 to
+/// 1e6, uniform in [−1e6, 0], ties, zeros) max |Δ log F| 3.6e-15, relative Δω 1.3e-15, ΔH
+/// 7.8e-15 (relative to `√(H_ii H_jj)`), 58.6 nodes on average for d = 4 and 42.6 for d = 3 (the
+/// layout before: 82 and 76 nodes, Δω 5.0e-15, ΔH 2.3e-13); over 30 000 z with |z_i| up to
+/// 1e306, relative Δω 1.8e-15. The grading ratio starts at 3 and grows by 1.4 per panel: the
+/// Bessel factor's departure from its asymptote, the part that limits a panel's ratio, falls
+/// off like `(s_min/t)²`. Neighbouring layouts pass too (first 2–3, rho 2.5–3.5, grow 1.2–1.6);
+/// ratios from 4 up, a first breakpoint beyond 3 scales, or panels wider than 5 Gaussian
+/// scales (when the grading starts far below them, `FLOOR`) lose accuracy (up to 1e-13).
 const LAYOUT: Layout = Layout {
-    first: 1.0,
-    rho: 5.0,
+    first: 2.5,
+    rho: 3.0,
     w_max: 0.71,
-    trunc: 50.0,
-    kappa: 3.0,
+    trunc: 40.0,
+    kappa: 4.0,
+    grow: 1.4,
 };
 /// Most breakpoints a half can need.
 const MAX_BREAKS: usize = 200;
@@ -87,16 +135,23 @@ enum Group {
     Circle { zhi: f64, beta: f64 },
 }
 
-/// A group's scaled value and moment factors at radius² `r` (see [`Scaling`]).
+/// A group's scaled value and second moment factors at radius² `r` (see [`Scaling`]).
 #[derive(Clone, Copy, Default)]
 struct GroupEval {
     /// `C·g` (near position: `C·√r·g`)
     g: f64,
+}
+
+/// A group's scaled value and moment factors at a batch of `L` radii² (see [`Scaling`]).
+#[derive(Clone, Copy)]
+struct GroupLanes<const L: usize> {
+    /// `C·g` (near position: `C·√r·g`)
+    g: F<L>,
     /// second moments `D_k·r·E[x_k²]·g` (times the same factor as `g`) of the group's
     /// coordinates (lo, hi)
-    m: [f64; 2],
+    m: [F<L>; 2],
     /// fourth moments (lo lo, lo hi, hi hi), each times `D_k D_l` and the factor of `g`
-    q: [f64; 3],
+    q: [F<L>; 3],
 }
 
 /// A group's exact scale factors in one half of the integral.
@@ -170,55 +225,86 @@ impl Group {
         }
     }
 
-    /// Evaluates at radius² `r = root²` (the root is passed to avoid a sqrt), scaled by `sc`.
+    /// The scaled value `C·g` alone at one far radius² `r = root²` (for the bound that decides
+    /// whether the far half is needed).
+    fn eval_far(&self, sc: &Scaling, r: f64, root: f64) -> GroupEval {
+        match *self {
+            Group::Single { z } => GroupEval {
+                g: (r * z).exp() / root,
+            },
+            Group::Circle { zhi, beta } => {
+                let (i0, _, _, _) = crate::special::i01e_times(r * beta, sc.c);
+                GroupEval {
+                    g: (r * zhi).exp() * i0,
+                }
+            }
+        }
+    }
+
+    /// Evaluates at the radii² `r = root²` of a batch (the roots are passed to avoid square
+    /// roots; unused in the far position of a circle), scaled by `sc`.
     #[inline(always)]
-    fn eval(&self, sc: &Scaling, r: f64, root: f64, fourth: bool) -> GroupEval {
+    fn eval_lanes<
+        A: Arith,
+        const L: usize,
+        const L2: usize,
+        const L4: usize,
+        const FOURTH: bool,
+    >(
+        &self,
+        sc: &Scaling,
+        r: F<L>,
+        root: F<L>,
+    ) -> GroupLanes<L> {
         let rr = r * sc.inv_r;
+        let zero = F::splat(0.0);
         match *self {
             Group::Single { z } => {
-                let ex = (r * z).exp();
-                let g = if sc.near { ex } else { ex / root };
-                let mut e = GroupEval {
-                    g,
-                    m: [rr * g, 0.0],
-                    q: [0.0; 3],
+                let ex = lanes::exp::<A, L>(r * z);
+                let g = if sc.near {
+                    ex
+                } else {
+                    ex.zip(root, |e, s| e / s)
                 };
-                if fourth {
+                let mut e = GroupLanes {
+                    g,
+                    m: [rr * g, zero],
+                    q: [zero; 3],
+                };
+                if FOURTH {
                     e.q[0] = rr * rr * g;
                 }
                 e
             }
             Group::Circle { zhi, beta } => {
                 let x = r * beta;
-                let k = if sc.near { root * sc.c } else { sc.c };
-                let (i0, i1, dm, xdm) = i01e_times(x, k);
-                let ex = if zhi == 0.0 { 1.0 } else { (r * zhi).exp() };
-                let g = ex * i0;
-                let h = 0.5 * ex;
-                let mut e = GroupEval {
+                let k = if sc.near { root * sc.c } else { F::splat(sc.c) };
+                let b = lanes::bessel::<A, L, L2, L4, FOURTH>(x, k);
+                // e^{r zhi}; exactly 1 for zhi = 0 (always so for the far-right group)
+                let ex = if zhi == 0.0 {
+                    F::splat(1.0)
+                } else {
+                    lanes::exp::<A, L>(r * zhi)
+                };
+                let g = ex * b.i0;
+                let h = ex * 0.5;
+                let mut e = GroupLanes {
                     g,
                     m: [
-                        if sc.wide { h * xdm } else { h * rr * dm },
-                        h * rr * (i0 + i1),
+                        if sc.wide { h * b.xdm } else { h * rr * b.dm },
+                        h * rr * (b.i0 + b.i1),
                     ],
-                    q: [0.0; 3],
+                    q: [zero; 3],
                 };
-                if fourth {
-                    // k·I1e(x)/x without 0/0 at x = 0
-                    let i1x = if x > 1e-6 {
-                        i1 / x
-                    } else {
-                        k * (0.5 - 0.5 * x)
-                    };
-                    let i2 = i0 - 2.0 * i1x;
-                    let (kq, kx2q) = bessel_q_times(x, k);
+                if FOURTH {
+                    let i2 = b.i0 - b.i1x * 2.0;
                     let rr2 = rr * rr * ex;
                     e.q = if sc.wide {
-                        [ex * kx2q * 0.125, rr * ex * i1 * 0.25, 0.0]
+                        [ex * b.x2q * 0.125, rr * ex * b.i1 * 0.25, zero]
                     } else {
-                        [rr2 * kq * 0.125, rr2 * i1x * 0.25, 0.0]
+                        [rr2 * b.q * 0.125, rr2 * b.i1x * 0.25, zero]
                     };
-                    e.q[2] = rr2 * (3.0 * i0 + 4.0 * i1 + i2) * 0.125;
+                    e.q[2] = rr2 * (b.i0 * 3.0 + b.i1 * 4.0 + i2) * 0.125;
                 }
                 e
             }
@@ -226,33 +312,62 @@ impl Group {
     }
 }
 
-/// Breakpoints `0 = b0 < b1 < … = t_max` graded from the scale `s_min`; returns the count.
-fn breakpoints(
-    lay: &Layout,
+/// The panels `[b_i, b_{i+1}]` of one half, `0 = b0 < b1 < … = t_max`: the first breakpoint
+/// at `first·s_min` (the smallest feature scale), then graded geometrically by `rho`, with
+/// widths capped by `w_max` and by `kappa` Gaussian scales; at most `MAX_BREAKS` breakpoints.
+#[derive(Clone, Copy, Debug)]
+struct Panels {
+    lo: f64,
+    hi: f64,
+    /// breakpoints so far, `lo` included
+    count: usize,
+    done: bool,
     t_max: f64,
-    s_min: f64,
-    gauss: f64,
-    out: &mut [f64; MAX_BREAKS],
-) -> usize {
-    out[0] = 0.0;
-    let mut n = 1;
-    let mut x = (lay.first * s_min).min(t_max);
-    loop {
-        out[n] = x;
-        n += 1;
-        if x >= t_max || n == MAX_BREAKS - 1 {
-            break;
+    rho: f64,
+    grow: f64,
+    /// largest width: `min(w_max, kappa·gauss)`
+    step: f64,
+}
+
+impl Panels {
+    fn new(lay: &Layout, t_max: f64, s_min: f64, gauss: f64) -> Self {
+        Panels {
+            lo: 0.0,
+            hi: (lay.first * s_min).min(t_max),
+            count: 1,
+            done: false,
+            t_max,
+            rho: lay.rho,
+            grow: lay.grow,
+            step: lay.w_max.min(lay.kappa * gauss),
         }
-        x = (x * lay.rho)
-            .min(x + lay.w_max)
-            .min(x + lay.kappa * gauss)
-            .min(t_max);
     }
-    if out[n - 1] < t_max {
-        out[n] = t_max;
-        n += 1;
+}
+
+impl Iterator for Panels {
+    type Item = (f64, f64);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<(f64, f64)> {
+        if self.done {
+            return None;
+        }
+        let panel = (self.lo, self.hi);
+        self.count += 1;
+        let x = self.hi;
+        if x >= self.t_max {
+            self.done = true;
+        } else {
+            self.lo = x;
+            self.hi = if self.count == MAX_BREAKS - 1 {
+                self.t_max
+            } else {
+                (x * self.rho).min(x + self.step).min(self.t_max)
+            };
+            self.rho *= self.grow;
+        }
+        Some(panel)
     }
-    n
 }
 
 /// Accumulated scaled integrals: `f = ∫ g1 g2`, `m[k] = ∫ g·E[x_k²]`,
@@ -265,22 +380,28 @@ struct Sums {
     q: [[f64; 4]; 4],
 }
 
+/// [`Sums`] per lane, reduced at the end of a half.
+struct LaneSums<const L: usize> {
+    f: F<L>,
+    m: [F<L>; 4],
+    q: [[F<L>; 4]; 4],
+}
+
 /// The smallest first breakpoint relative to `t_max`: the near group contributes at most
 /// `O(t)` per unit `t` below its dominant region, so `[0, 1e-20·t_max]` holds at most about
 /// `1e-20` of every integral and needs no grading (this caps the panel count when the
 /// Bessel scale `1/√β` is far below `t_max`, e.g. `β = 1e300`, `t_max = 1/√2`).
 const FLOOR: f64 = 1e-20;
 
-/// Integrates one half. `near_first`: the integration variable is √r of group 1 (left half);
-/// otherwise √r of group 2 (right half). Returns the scaled sums and both groups' scalings.
-fn half<const M: usize>(
-    rule: &([f64; M], [f64; M]),
-    lay: &Layout,
-    g1: &Group,
-    g2: &Group,
-    near_first: bool,
-    fourth: bool,
-) -> (Sums, Scaling, Scaling) {
+/// The panels and both groups' scalings of one half (see [`half`]).
+#[derive(Clone, Copy, Debug)]
+struct HalfSetup {
+    panels: Panels,
+    sc1: Scaling,
+    sc2: Scaling,
+}
+
+fn half_setup(lay: &Layout, g1: &Group, g2: &Group, near_first: bool) -> HalfSetup {
     let a = g1.rate();
     let (t_max, scales) = if near_first {
         let t_max = if a > 0.0 {
@@ -306,67 +427,202 @@ fn half<const M: usize>(
     } else {
         f64::INFINITY
     };
-    let mut bp = [0.0; MAX_BREAKS];
     let gauss = if a > 0.0 {
         1.0 / a.sqrt()
     } else {
         f64::INFINITY
     };
-    let nb = breakpoints(lay, t_max, s_min, gauss, &mut bp);
-    let n1 = g1.size();
-    let n2 = g2.size();
-    let mut sums = Sums::default();
-    for p in 0..nb - 1 {
-        let (lo, hi) = (bp[p], bp[p + 1]);
+    HalfSetup {
+        panels: Panels::new(lay, t_max, s_min, gauss),
+        sc1,
+        sc2,
+    }
+}
+
+/// Integrates one half, `L` nodes at a time. `near_first`: the integration variable is √r of
+/// group 1 (left half); otherwise √r of group 2 (right half). `N1` is group 1's size, `FOURTH`
+/// asks for the fourth moments. Returns the scaled sums.
+///
+/// The batch kernel: every step below is the same operation on all lanes (the compiler emits
+/// SIMD instructions for the instruction set of the function it is inlined into, see
+/// [`half_on`]); the lane sums are reduced in lane order at the end, so the result does not
+/// depend on anything but the input.
+#[inline(always)]
+fn half<
+    A: Arith,
+    const L: usize,
+    const L2: usize,
+    const L4: usize,
+    const N1: usize,
+    const FOURTH: bool,
+>(
+    rule: &Rule,
+    g1: &Group,
+    g2: &Group,
+    near_first: bool,
+    setup: &HalfSetup,
+) -> Sums {
+    let zero = F::<L>::splat(0.0);
+    let mut acc = LaneSums {
+        f: zero,
+        m: [zero; 4],
+        q: [[zero; 4]; 4],
+    };
+    let (sc1, sc2) = (&setup.sc1, &setup.sc2);
+    // the far group needs √r only if it is a single axis
+    let far_root = if near_first { g2.size() == 1 } else { N1 == 1 };
+    // the rule's nodes and weights, padded to whole batches of L
+    let m = rule.n.div_ceil(L) * L;
+    let (rx, rw) = (&rule.x[..m], &rule.w[..m]);
+    let mut panels = 0;
+    for (lo, hi) in setup.panels {
+        panels += 1;
         let width = hi - lo;
-        sums.nodes += M;
-        for k in 0..M {
-            let t = lo + width * rule.0[k];
-            // 2t dt, the 2t absorbed by the near group's √r
-            let w = width * rule.1[k] * 2.0;
+        for (xs, ws) in rx.chunks_exact(L).zip(rw.chunks_exact(L)) {
+            let mut t = zero;
+            let mut w = zero;
+            for l in 0..L {
+                t.0[l] = lo + width * xs[l];
+                // 2t dt, the 2t absorbed by the near group's √r
+                w.0[l] = width * ws[l] * 2.0;
+            }
             let t2 = t * t;
-            let other = 1.0 - t2;
-            let (e1, e2) = if near_first {
-                (
-                    g1.eval(&sc1, t2, t, fourth),
-                    g2.eval(&sc2, other, other.sqrt(), fourth),
-                )
+            let other = F::splat(1.0) - t2;
+            let other_root = if far_root { other.sqrt() } else { other };
+            let (r1, root1, r2, root2) = if near_first {
+                (t2, t, other, other_root)
             } else {
-                (
-                    g1.eval(&sc1, other, other.sqrt(), fourth),
-                    g2.eval(&sc2, t2, t, fourth),
-                )
+                (other, other_root, t2, t)
             };
+            let e1 = g1.eval_lanes::<A, L, L2, L4, FOURTH>(sc1, r1, root1);
+            let e2 = g2.eval_lanes::<A, L, L2, L4, FOURTH>(sc2, r2, root2);
             let wg1 = w * e1.g;
             let wg2 = w * e2.g;
-            sums.f += wg1 * e2.g;
-            for i in 0..n1 {
-                sums.m[i] += e1.m[i] * wg2;
+            acc.f = A::madd(wg1, e2.g, acc.f);
+            for i in 0..N1 {
+                acc.m[i] = A::madd(e1.m[i], wg2, acc.m[i]);
             }
-            for j in 0..n2 {
-                sums.m[n1 + j] += wg1 * e2.m[j];
+            for j in 0..2 {
+                acc.m[N1 + j] = A::madd(wg1, e2.m[j], acc.m[N1 + j]);
             }
-            if fourth {
+            if FOURTH {
                 // within group 1
-                sums.q[0][0] += e1.q[0] * wg2;
-                if n1 == 2 {
-                    sums.q[0][1] += e1.q[1] * wg2;
-                    sums.q[1][1] += e1.q[2] * wg2;
+                acc.q[0][0] = A::madd(e1.q[0], wg2, acc.q[0][0]);
+                if N1 == 2 {
+                    acc.q[0][1] = A::madd(e1.q[1], wg2, acc.q[0][1]);
+                    acc.q[1][1] = A::madd(e1.q[2], wg2, acc.q[1][1]);
                 }
                 // within group 2
-                sums.q[n1][n1] += wg1 * e2.q[0];
-                sums.q[n1][n1 + 1] += wg1 * e2.q[1];
-                sums.q[n1 + 1][n1 + 1] += wg1 * e2.q[2];
+                acc.q[N1][N1] = A::madd(wg1, e2.q[0], acc.q[N1][N1]);
+                acc.q[N1][N1 + 1] = A::madd(wg1, e2.q[1], acc.q[N1][N1 + 1]);
+                acc.q[N1 + 1][N1 + 1] = A::madd(wg1, e2.q[2], acc.q[N1 + 1][N1 + 1]);
                 // across groups
-                for i in 0..n1 {
-                    for j in 0..n2 {
-                        sums.q[i][n1 + j] += w * e1.m[i] * e2.m[j];
+                for i in 0..N1 {
+                    let wm = w * e1.m[i];
+                    for j in 0..2 {
+                        acc.q[i][N1 + j] = A::madd(wm, e2.m[j], acc.q[i][N1 + j]);
                     }
                 }
             }
         }
     }
-    (sums, sc1, sc2)
+    let mut sums = Sums {
+        nodes: panels * rule.n,
+        f: acc.f.sum(),
+        ..Sums::default()
+    };
+    for (s, a) in sums.m.iter_mut().zip(&acc.m).take(N1 + 2) {
+        *s = a.sum();
+    }
+    if FOURTH {
+        for (i, (srow, arow)) in sums.q.iter_mut().zip(&acc.q).enumerate().take(N1 + 2) {
+            for (s, a) in srow.iter_mut().zip(arow).skip(i).take(N1 + 2 - i) {
+                *s = a.sum();
+            }
+        }
+    }
+    sums
+}
+
+/// [`half`] for the group sizes and moments asked for, with arithmetic `A` on `L` lanes.
+#[inline(always)]
+fn half_any<A: Arith, const L: usize, const L2: usize, const L4: usize>(
+    rule: &Rule,
+    g1: &Group,
+    g2: &Group,
+    near_first: bool,
+    fourth: bool,
+    setup: &HalfSetup,
+) -> Sums {
+    match (g1.size(), fourth) {
+        (1, false) => half::<A, L, L2, L4, 1, false>(rule, g1, g2, near_first, setup),
+        (1, true) => half::<A, L, L2, L4, 1, true>(rule, g1, g2, near_first, setup),
+        (_, false) => half::<A, L, L2, L4, 2, false>(rule, g1, g2, near_first, setup),
+        (_, true) => half::<A, L, L2, L4, 2, true>(rule, g1, g2, near_first, setup),
+    }
+}
+
+/// The portable kernel: plain `a·b + c`, 4 lanes (two SSE2 or NEON registers per step).
+fn half_portable(
+    rule: &Rule,
+    g1: &Group,
+    g2: &Group,
+    near_first: bool,
+    fourth: bool,
+    setup: &HalfSetup,
+) -> Sums {
+    half_any::<Plain, 4, 8, 16>(rule, g1, g2, near_first, fourth, setup)
+}
+
+/// The kernel compiled for AVX2 and FMA: 4 lanes, one 256-bit register per step.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn half_avx2(
+    rule: &Rule,
+    g1: &Group,
+    g2: &Group,
+    near_first: bool,
+    fourth: bool,
+    setup: &HalfSetup,
+) -> Sums {
+    half_any::<Fused, 4, 8, 16>(rule, g1, g2, near_first, fourth, setup)
+}
+
+/// The kernel compiled for AVX-512 (F, VL, DQ) and FMA: 8 lanes, one 512-bit register per step.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx2,fma")]
+fn half_avx512(
+    rule: &Rule,
+    g1: &Group,
+    g2: &Group,
+    near_first: bool,
+    fourth: bool,
+    setup: &HalfSetup,
+) -> Sums {
+    half_any::<Fused, 8, 16, 32>(rule, g1, g2, near_first, fourth, setup)
+}
+
+/// One half with the kernel of `path` (which must be available, see [`Path::available`]).
+fn half_on(
+    path: Path,
+    rule: &Rule,
+    g1: &Group,
+    g2: &Group,
+    near_first: bool,
+    fourth: bool,
+    setup: &HalfSetup,
+) -> Sums {
+    debug_assert!(path.available());
+    match path {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `path` is only `Avx2` when the CPU has AVX2 and FMA (`Path::available`,
+        // checked by every caller: `Path::detected` and `log_f_with_path`).
+        Path::Avx2 => unsafe { half_avx2(rule, g1, g2, near_first, fourth, setup) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as above, with AVX-512 F/VL/DQ, AVX2 and FMA.
+        Path::Avx512 => unsafe { half_avx512(rule, g1, g2, near_first, fourth, setup) },
+        _ => half_portable(rule, g1, g2, near_first, fourth, setup),
+    }
 }
 
 /// The `D` factors of the d coordinates (group 1's, then group 2's).
@@ -378,52 +634,43 @@ fn d_factors(g1: &Group, sc1: &Scaling, sc2: &Scaling) -> [f64; 4] {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-fn integrate<const M: usize>(
-    rule: &([f64; M], [f64; M]),
-    lay: &Layout,
-    c: f64,
-    g1: Group,
-    g2: Group,
-    z: &[f64],
-    grad: Option<&mut [f64]>,
-    hess: Option<&mut [f64]>,
-) -> Result<f64> {
-    integrate_counted(rule, lay, c, g1, g2, z, grad, hess).map(|r| r.0)
+/// `log F`, `ω` and (with `fourth`) the Hessian in sorted order, and the node count.
+struct Integral {
+    log_f: f64,
+    omega: [f64; 4],
+    hess: [f64; 16],
+    nodes: usize,
 }
 
 #[allow(clippy::too_many_arguments)]
-fn integrate_counted<const M: usize>(
-    rule: &([f64; M], [f64; M]),
+fn integrate_counted(
+    path: Path,
+    rule: &Rule,
     lay: &Layout,
-    c: f64,
+    log_c: f64,
     g1: Group,
     g2: Group,
-    z: &[f64],
-    grad: Option<&mut [f64]>,
-    hess: Option<&mut [f64]>,
-) -> Result<(f64, usize)> {
-    let d = z.len();
-    let fourth = hess.is_some();
-    let (mut sums, sc1, sc2) = half(rule, lay, &g1, &g2, true, fourth);
+    d: usize,
+    fourth: bool,
+) -> Integral {
+    let left = half_setup(lay, &g1, &g2, true);
+    let (sc1, sc2) = (left.sc1, left.sc2);
+    let mut sums = half_on(path, rule, &g1, &g2, true, fourth, &left);
     let dl = d_factors(&g1, &sc1, &sc2);
     // The far half u ∈ [½, 1]: A(u) decreases and B(1−u) ≤ 1, so its integral is at most
     // A(½)/2 (times the moment factors, ≤ 1). Skip it when that bound is negligible against
     // F and against every moment integral (all in the left half's scaled units:
     // f_true = f/(C1 C2), m_true = m/(C1 C2 D)).
-    let at_half = g1.eval(
-        &Scaling { near: false, ..sc1 },
-        0.5,
-        std::f64::consts::FRAC_1_SQRT_2,
-        false,
-    );
+    let at_half = g1.eval_far(&sc1, 0.5, std::f64::consts::FRAC_1_SQRT_2);
     let bound = 0.5 * at_half.g * sc2.c;
     let smallest = sums.m[..d]
         .iter()
         .zip(dl.iter())
         .fold(sums.f, |acc, (&m, &dk)| acc.min(m / dk));
     if bound > 1e-18 * smallest {
-        let (right, rc1, rc2) = half(rule, lay, &g1, &g2, false, fourth);
+        let setup = half_setup(lay, &g1, &g2, false);
+        let right = half_on(path, rule, &g1, &g2, false, fourth, &setup);
+        let (rc1, rc2) = (setup.sc1, setup.sc2);
         let dr = d_factors(&g1, &rc1, &rc2);
         // right-half sums in the left half's units (modest ratios: this half only runs
         // when group 1's rate is below a few thousand)
@@ -449,19 +696,22 @@ fn integrate_counted<const M: usize>(
     // normal double, else log f minus the scale's exponent times ln 2
     let f_true = sums.f / sc1.c / sc2.c;
     let log_f = if f_true >= f64::MIN_POSITIVE {
-        c.ln() + f_true.ln()
+        log_c + f_true.ln()
     } else {
         let exponent = |v: f64| ((v.to_bits() >> 52) as i64 - 1023) as f64;
-        c.ln() + sums.f.ln() - (exponent(sc1.c) + exponent(sc2.c)) * std::f64::consts::LN_2
+        log_c + sums.f.ln() - (exponent(sc1.c) + exponent(sc2.c)) * std::f64::consts::LN_2
     };
-    let mut omega = [0.0; 4];
-    for k in 0..d {
-        omega[k] = sums.m[k] / sums.f / dl[k];
+    let mut out = Integral {
+        log_f,
+        omega: [0.0; 4],
+        hess: [0.0; 16],
+        nodes: sums.nodes,
+    };
+    for ((w, m), dk) in out.omega.iter_mut().zip(&sums.m).zip(&dl).take(d) {
+        *w = m / sums.f / dk;
     }
-    if let Some(g) = grad {
-        g.copy_from_slice(&omega[..d]);
-    }
-    if let Some(h) = hess {
+    if fourth {
+        let (omega, h) = (&out.omega, &mut out.hess);
         // Cov(x_i², x_j²) for i, j < d; the last row and column from Σ_i ∂ω_i/∂z_j = 0,
         // which avoids the cancellation E[x_d⁴] − ω_d² when x_d² ≈ 1.
         for i in 0..d - 1 {
@@ -480,14 +730,38 @@ fn integrate_counted<const M: usize>(
         }
         h[d * d - 1] = last_sum;
     }
-    Ok((log_f, sums.nodes))
+    out
 }
 
+/// Evaluates with the given rule, layout and kernel; writes the outputs in sorted order.
+fn integrate(
+    path: Path,
+    rule: &Rule,
+    lay: &Layout,
+    z: &[f64],
+    grad: Option<&mut [f64]>,
+    hess: Option<&mut [f64]>,
+) -> Result<(f64, usize)> {
+    let d = z.len();
+    let (log_c, g1, g2) = groups(z);
+    let out = integrate_counted(path, rule, lay, log_c, g1, g2, d, hess.is_some());
+    if let Some(g) = grad {
+        g.copy_from_slice(&out.omega[..d]);
+    }
+    if let Some(h) = hess {
+        h.copy_from_slice(&out.hess[..d * d]);
+    }
+    Ok((out.log_f, out.nodes))
+}
+
+/// `log c` and the two groups of sorted `z` (d = 3 or 4), `F = c ∫ A B` (module documentation).
 fn groups(z: &[f64]) -> (f64, Group, Group) {
-    let pi = std::f64::consts::PI;
+    /// ln(2π) and ln(2π²), as `f64::ln` rounds them
+    const LN_2PI: f64 = 1.8378770664093453;
+    const LN_2PI2: f64 = 2.9826069522587457;
     if z.len() == 3 {
         (
-            2.0 * pi,
+            LN_2PI,
             Group::Single { z: z[0] },
             Group::Circle {
                 zhi: z[2],
@@ -496,7 +770,7 @@ fn groups(z: &[f64]) -> (f64, Group, Group) {
         )
     } else {
         (
-            2.0 * pi * pi,
+            LN_2PI2,
             Group::Circle {
                 zhi: z[1],
                 beta: 0.5 * (z[1] - z[0]),
@@ -510,28 +784,36 @@ fn groups(z: &[f64]) -> (f64, Group, Group) {
 }
 
 /// The same integral with a much finer rule (Gauss–Legendre 30 on a layout ~4× denser,
-/// truncation at e^{−80}): the convergence check used by the tests.
+/// truncation at e^{−80}): the convergence check used by the tests. Sorted `z`; writes `ω`
+/// and, if given, the Hessian (sorted order).
 #[doc(hidden)]
-pub fn log_f_sorted_fine(z: &[f64], grad: &mut [f64]) -> Result<f64> {
-    const R30: ([f64; 30], [f64; 30]) = gauss_legendre_unit::<30>();
+pub fn log_f_sorted_fine(z: &[f64], grad: &mut [f64], hess: Option<&mut [f64]>) -> Result<f64> {
+    static R30: ([f64; 32], [f64; 32]) = padded::<30, 32>();
     let fine = Layout {
         first: 0.25,
         rho: 1.6,
         w_max: 0.08,
         trunc: 80.0,
         kappa: 0.5,
+        grow: 1.0,
     };
-    let (c, g1, g2) = groups(z);
-    integrate(&R30, &fine, c, g1, g2, z, Some(grad), None)
+    let rule = Rule {
+        x: &R30.0,
+        w: &R30.1,
+        n: 30,
+    };
+    integrate(Path::detected(), &rule, &fine, z, Some(grad), hess).map(|r| r.0)
 }
 
-/// Evaluation with a chosen Gauss–Legendre order and layout (for tuning experiments).
+/// Evaluation with a chosen Gauss–Legendre order and layout `[first, rho, w_max, trunc, kappa,
+/// grow]` (`grow` optional, default 1) for tuning experiments; returns `log F` and the node count.
 #[doc(hidden)]
 pub fn log_f_sorted_tuned(
     z: &[f64],
     grad: &mut [f64],
+    hess: Option<&mut [f64]>,
     n: usize,
-    lay: [f64; 5],
+    lay: &[f64],
 ) -> Result<(f64, usize)> {
     let lay = Layout {
         first: lay[0],
@@ -539,41 +821,39 @@ pub fn log_f_sorted_tuned(
         w_max: lay[2],
         trunc: lay[3],
         kappa: lay[4],
+        grow: lay.get(5).copied().unwrap_or(1.0),
     };
-    let (c, g1, g2) = groups(z);
     macro_rules! go {
-        ($n:literal) => {{
-            const R: ([f64; $n], [f64; $n]) = gauss_legendre_unit::<$n>();
-            integrate_counted(&R, &lay, c, g1, g2, z, Some(grad), None)
+        ($n:literal, $p:literal) => {{
+            static R: ([f64; $p], [f64; $p]) = padded::<$n, $p>();
+            let rule = Rule {
+                x: &R.0,
+                w: &R.1,
+                n: $n,
+            };
+            integrate(Path::detected(), &rule, &lay, z, Some(grad), hess)
         }};
     }
     match n {
-        6 => go!(6),
-        8 => go!(8),
-        10 => go!(10),
-        12 => go!(12),
-        14 => go!(14),
-        16 => go!(16),
-        _ => go!(20),
+        6 => go!(6, 8),
+        8 => go!(8, 8),
+        10 => go!(10, 16),
+        12 => go!(12, 16),
+        14 => go!(14, 16),
+        16 => go!(16, 16),
+        18 => go!(18, 24),
+        24 => go!(24, 24),
+        32 => go!(32, 32),
+        _ => go!(20, 24),
     }
 }
 
-/// d = 3, sorted `z1 ≤ z2 ≤ z3 = 0` (see `SortedEval`).
-pub(crate) fn log_f_sorted_d3(
+/// d = 3 or 4 with a chosen kernel (see [`Path`]); sorted `z`, outputs in sorted order.
+pub(crate) fn log_f_sorted_on(
+    path: Path,
     z: &[f64],
     grad: Option<&mut [f64]>,
     hess: Option<&mut [f64]>,
 ) -> Result<f64> {
-    let (c, g1, g2) = groups(z);
-    integrate(&RULE, &LAYOUT, c, g1, g2, z, grad, hess)
-}
-
-/// d = 4, sorted `z1 ≤ z2 ≤ z3 ≤ z4 = 0` (see `SortedEval`).
-pub(crate) fn log_f_sorted_d4(
-    z: &[f64],
-    grad: Option<&mut [f64]>,
-    hess: Option<&mut [f64]>,
-) -> Result<f64> {
-    let (c, g1, g2) = groups(z);
-    integrate(&RULE, &LAYOUT, c, g1, g2, z, grad, hess)
+    integrate(path, &RULE, &LAYOUT, z, grad, hess).map(|r| r.0)
 }
