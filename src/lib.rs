@@ -24,6 +24,8 @@ mod params;
 pub mod quaternion;
 mod sample;
 pub mod special;
+#[cfg(test)]
+mod test_rng;
 
 pub use distribution::Bingham;
 pub use error::{Error, Result, MAX_DIM, MIN_DIM};

@@ -518,15 +518,7 @@ pub(crate) fn jacobi_general(
 mod tests {
     use super::*;
 
-    fn xorshift(seed: u64) -> impl FnMut() -> f64 {
-        let mut s = seed;
-        move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        }
-    }
+    use crate::test_rng::xorshift;
 
     /// Random orthogonal n×n matrix.
     fn orthogonal(n: usize, r: &mut impl FnMut() -> f64) -> DMatrix<f64> {

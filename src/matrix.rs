@@ -210,15 +210,7 @@ mod tests {
     use super::*;
     use nalgebra::{Const, DMatrix, Dyn, SMatrix};
 
-    fn xorshift(seed: u64) -> impl FnMut() -> f64 {
-        let mut s = seed;
-        move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        }
-    }
+    use crate::test_rng::xorshift;
 
     #[test]
     fn sym_eigen_sorts_fixes_signs_and_reconstructs() {

@@ -237,15 +237,7 @@ mod tests {
     use super::*;
     use nalgebra::{Const, SMatrix, SVector};
 
-    fn xorshift(seed: u64) -> impl FnMut() -> f64 {
-        let mut s = seed;
-        move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        }
-    }
+    use crate::test_rng::xorshift;
 
     fn unit_random<const D: usize>(r: &mut impl FnMut() -> f64) -> SVector<f64, D> {
         SVector::<f64, D>::from_fn(|_, _| r()).normalize()
