@@ -518,7 +518,16 @@ pub(crate) fn jacobi_general(
 mod tests {
     use super::*;
 
-    use crate::test_rng::xorshift;
+    // (its own copy: benches/eigen.rs includes this file outside the crate)
+    fn xorshift(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed;
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
 
     /// Random orthogonal n×n matrix.
     fn orthogonal(n: usize, r: &mut impl FnMut() -> f64) -> DMatrix<f64> {
