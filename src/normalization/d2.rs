@@ -43,7 +43,7 @@ fn pow2_floor_sqrt(x: f64) -> f64 {
     f64::from_bits(((e / 2 + 1023) as u64) << 52)
 }
 
-/// Sorted evaluation (see `SortedEval`): `z = [z1, 0]`, `z1 ≤ 0`.
+/// Sorted evaluation (see `sorted_eval` in the parent module): `z = [z1, 0]`, `z1 ≤ 0`.
 pub(crate) fn log_f_sorted(
     z: &[f64],
     grad: Option<&mut [f64]>,

@@ -1061,7 +1061,7 @@ pub(crate) fn evaluate_with(
     })
 }
 
-/// Sorted evaluation (see `SortedEval`).
+/// Sorted evaluation (see `sorted_eval` in the parent module).
 pub(crate) fn log_f_sorted(
     z: &[f64],
     grad: Option<&mut [f64]>,

@@ -98,17 +98,21 @@ pub struct LogNormalization {
     pub hess: Vec<f64>,
 }
 
-/// Evaluation on sorted, shifted input: `z` ascending, `z[d-1] = 0`, all finite.
-/// Writes the gradient / Hessian (sorted order) when the slices are given.
-pub(crate) type SortedEval =
-    fn(z: &[f64], grad: Option<&mut [f64]>, hess: Option<&mut [f64]>) -> Result<f64>;
-
-fn sorted_eval(d: usize, method: Method) -> SortedEval {
-    match (method, d) {
-        (Method::Saddlepoint, _) => saddlepoint::log_f_sorted,
-        (Method::Exact, 2) => d2::log_f_sorted,
-        (Method::Exact, 3 | 4) => |z, g, h| quad::log_f_sorted_on(Path::detected(), z, g, h),
-        (Method::Exact, _) => general::log_f_sorted,
+/// The evaluation of `method` on sorted, shifted input (`z` ascending, `z[d-1] = 0`, all
+/// finite), with the d = 3, 4 quadrature on the kernel `path`. Writes the gradient / Hessian
+/// (sorted order) when the slices are given; every `log_f_sorted*` below has this contract.
+fn sorted_eval(
+    method: Method,
+    path: Path,
+    z: &[f64],
+    grad: Option<&mut [f64]>,
+    hess: Option<&mut [f64]>,
+) -> Result<f64> {
+    match (method, z.len()) {
+        (Method::Saddlepoint, _) => saddlepoint::log_f_sorted(z, grad, hess),
+        (Method::Exact, 2) => d2::log_f_sorted(z, grad, hess),
+        (Method::Exact, 3 | 4) => quad::log_f_sorted_on(path, z, grad, hess),
+        (Method::Exact, _) => general::log_f_sorted(z, grad, hess),
     }
 }
 
@@ -218,10 +222,8 @@ fn sorted_call<const N: usize>(
                 .into(),
         ));
     }
-    let eval = |zs: &[f64], g: Option<&mut [f64]>, h: Option<&mut [f64]>| match (method, d) {
-        (Method::Exact, 2) => d2::log_f_sorted(zs, g, h),
-        (Method::Exact, 3 | 4) => quad::log_f_sorted_on(path, zs, g, h),
-        _ => sorted_eval(d, method)(zs, g, h),
+    let eval = |zs: &[f64], g: Option<&mut [f64]>, h: Option<&mut [f64]>| {
+        sorted_eval(method, path, zs, g, h)
     };
     let mut gs = [0.0f64; N];
     let want_grad = grad.is_some();

@@ -79,7 +79,7 @@ fn log_f_hat(z: &[f64], extra: &[(usize, f64)]) -> Result<f64> {
     }
 }
 
-/// Sorted evaluation (see `SortedEval`): the saddlepoint approximation of `log F`, and its
+/// Sorted evaluation (see `sorted_eval` in the parent module): the saddlepoint approximation of `log F`, and its
 /// gradient / Hessian through the Kume–Wood identities (approximate; `Σ ω ≠ 1` exactly).
 pub(crate) fn log_f_sorted(
     z: &[f64],
