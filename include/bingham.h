@@ -150,6 +150,13 @@ typedef enum bingham_status {
      * library; the message says where. The library stays usable.
      */
     BINGHAM_ERR_PANIC = 6,
+    /**
+     * A user-supplied callback (the transition or log-likelihood function of
+     * `bingham_filter_predict_nonlinear` / `bingham_filter_update_nonlinear`) returned a
+     * non-zero status, or a value that is not finite (or, for a transition, not unit length
+     * within `BINGHAM_UNIT_TOL`). The message names the point and the value.
+     */
+    BINGHAM_ERR_CALLBACK = 7,
 } bingham_status;
 
 /**

@@ -817,5 +817,6 @@ fn prefix(e: Error, k: usize) -> Error {
         Error::InvalidArgument(m) => Error::InvalidArgument(format!("sample {k}: {m}")),
         Error::NotConverged(m) => Error::NotConverged(format!("sample {k}: {m}")),
         Error::Numerical(m) => Error::Numerical(format!("sample {k}: {m}")),
+        Error::Callback(m) => Error::Callback(format!("sample {k}: {m}")),
     }
 }

@@ -19,6 +19,9 @@ pub enum Error {
     NotConverged(String),
     /// A computation produced a non-finite or otherwise unusable intermediate result.
     Numerical(String),
+    /// A user-supplied function (the transition or log-likelihood of the nonlinear filter
+    /// steps) reported failure or returned an unusable value (not finite, not unit length).
+    Callback(String),
 }
 
 impl fmt::Display for Error {
@@ -28,6 +31,7 @@ impl fmt::Display for Error {
             Error::InvalidArgument(m) => write!(f, "invalid argument: {m}"),
             Error::NotConverged(m) => write!(f, "not converged: {m}"),
             Error::Numerical(m) => write!(f, "numerical failure: {m}"),
+            Error::Callback(m) => write!(f, "callback failed: {m}"),
         }
     }
 }

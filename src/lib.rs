@@ -11,6 +11,7 @@
 //! Quaternions are scalar first, `(w, x, y, z)`.
 
 pub mod ahrs;
+pub mod deterministic;
 pub mod distribution;
 pub mod error;
 pub mod ffi;

@@ -38,10 +38,15 @@ pub enum bingham_status {
     /// An internal error (a Rust panic) was caught at the C boundary. This is a bug in the
     /// library; the message says where. The library stays usable.
     BINGHAM_ERR_PANIC = 6,
+    /// A user-supplied callback (the transition or log-likelihood function of
+    /// `bingham_filter_predict_nonlinear` / `bingham_filter_update_nonlinear`) returned a
+    /// non-zero status, or a value that is not finite (or, for a transition, not unit length
+    /// within `BINGHAM_UNIT_TOL`). The message names the point and the value.
+    BINGHAM_ERR_CALLBACK = 7,
 }
 
 /// All codes, in numeric order.
-pub(crate) const ALL_STATUS: [bingham_status; 7] = [
+pub(crate) const ALL_STATUS: [bingham_status; 8] = [
     bingham_status::BINGHAM_OK,
     bingham_status::BINGHAM_ERR_NULL_ARGUMENT,
     bingham_status::BINGHAM_ERR_INVALID_DIMENSION,
@@ -49,6 +54,7 @@ pub(crate) const ALL_STATUS: [bingham_status; 7] = [
     bingham_status::BINGHAM_ERR_NOT_CONVERGED,
     bingham_status::BINGHAM_ERR_NUMERICAL,
     bingham_status::BINGHAM_ERR_PANIC,
+    bingham_status::BINGHAM_ERR_CALLBACK,
 ];
 
 impl bingham_status {
@@ -62,6 +68,7 @@ impl bingham_status {
             bingham_status::BINGHAM_ERR_NOT_CONVERGED => b"not converged\0",
             bingham_status::BINGHAM_ERR_NUMERICAL => b"numerical failure\0",
             bingham_status::BINGHAM_ERR_PANIC => b"internal error (panic)\0",
+            bingham_status::BINGHAM_ERR_CALLBACK => b"callback failed\0",
         }
     }
 }
@@ -73,6 +80,7 @@ impl From<&Error> for bingham_status {
             Error::InvalidArgument(_) => bingham_status::BINGHAM_ERR_INVALID_ARGUMENT,
             Error::NotConverged(_) => bingham_status::BINGHAM_ERR_NOT_CONVERGED,
             Error::Numerical(_) => bingham_status::BINGHAM_ERR_NUMERICAL,
+            Error::Callback(_) => bingham_status::BINGHAM_ERR_CALLBACK,
         }
     }
 }
@@ -120,7 +128,8 @@ mod tests {
         assert_eq!(s(0), "ok");
         assert_eq!(s(3), "invalid argument");
         assert_eq!(s(6), "internal error (panic)");
-        assert_eq!(s(7), "unknown status");
+        assert_eq!(s(7), "callback failed");
+        assert_eq!(s(8), "unknown status");
         assert_eq!(s(-1), "unknown status");
         assert_eq!(s(c_int::MAX), "unknown status");
         for st in ALL_STATUS {
@@ -149,6 +158,10 @@ mod tests {
         assert_eq!(
             bingham_status::from(&Error::Numerical(m())),
             BINGHAM_ERR_NUMERICAL
+        );
+        assert_eq!(
+            bingham_status::from(&Error::Callback(m())),
+            BINGHAM_ERR_CALLBACK
         );
     }
 }

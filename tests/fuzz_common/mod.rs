@@ -485,6 +485,7 @@ pub fn status_name(s: bingham_status) -> &'static str {
         BINGHAM_ERR_NOT_CONVERGED => "NOT_CONVERGED",
         BINGHAM_ERR_NUMERICAL => "NUMERICAL",
         BINGHAM_ERR_PANIC => "PANIC",
+        BINGHAM_ERR_CALLBACK => "CALLBACK",
     }
 }
 
