@@ -54,7 +54,8 @@ pub enum Scheme {
     /// The TAC 2016 scheme with its weighting parameter `lambda` in `[0, 1]` (libDirectional's
     /// default is 0.5): `2d − 1` points, exact second moment.
     Tac2016 {
-        /// Weighting parameter in `[0, 1]`: 1 puts the least weight on the mode.
+        /// Weighting parameter in `[0, 1]`: the mode's weight is `λ ω_{d−1}` (λ = 0: no point
+        /// at the mode; λ = 1: the pairs lie on the principal axes themselves).
         lambda: f64,
     },
     /// The moment-matched scheme: `2d² − 4d + 3` points reproducing every second and fourth

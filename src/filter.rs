@@ -64,16 +64,144 @@ type Vect<const D: usize> = SVector<f64, D>;
 /// `z = −1e10` corresponds to an angular standard deviation of about `1/√(2·1e10) ≈ 7 µrad`.
 pub const MAX_CONCENTRATION: f64 = 1e10;
 
-/// The largest change of the log-weights' spread one tempering step of
-/// [`BinghamFilter::update_nonlinear`] may make: each step applies `L^{Δβ}` with
-/// `Δβ · (max log L − min log L) ≤ TEMPERING_SPREAD` over the current deterministic samples.
+/// The largest spread (max − min over the current deterministic samples) of the exponent one
+/// tempering step of [`BinghamFilter::update_nonlinear`] applies.
 pub const TEMPERING_SPREAD: f64 = 2.0;
+
+/// Importance-corrected moment matches at the end of [`BinghamFilter::update_nonlinear`].
+pub const CORRECTION_PASSES: usize = 2;
 
 /// The most tempering steps [`BinghamFilter::update_nonlinear`] takes.
 pub const MAX_TEMPERING_STEPS: usize = 200;
 
 /// The most deterministic samples a filter step uses (the Moments scheme for d = 4).
 const MAX_SAMPLES: usize = 19;
+
+/// Deterministic samples with their weights and log-likelihoods (on the stack).
+struct Samples<const D: usize> {
+    x: [Vect<D>; MAX_SAMPLES],
+    w: [f64; MAX_SAMPLES],
+    l: [f64; MAX_SAMPLES],
+    n: usize,
+}
+
+/// Unknowns of a symmetric `P` for d = 4.
+const MAX_UNKNOWNS: usize = 10;
+
+impl<const D: usize> Samples<D> {
+    fn new() -> Self {
+        Samples {
+            x: [Vect::<D>::zeros(); MAX_SAMPLES],
+            w: [0.0; MAX_SAMPLES],
+            l: [0.0; MAX_SAMPLES],
+            n: 0,
+        }
+    }
+
+    /// The largest weighted-free residual `|l_k − c − x_kᵀ P x_k|` over the samples, with `c`
+    /// the weighted mean offset (the fit's constant).
+    #[allow(clippy::needless_range_loop)] // parallel arrays
+    fn misfit(&self, p: &Mat<D>) -> f64 {
+        let mut r = [0.0; MAX_SAMPLES];
+        let (mut sw, mut c) = (0.0, 0.0);
+        for k in 0..self.n {
+            let x = &self.x[k];
+            r[k] = self.l[k] - (x.transpose() * p * x)[(0, 0)];
+            c += self.w[k] * r[k];
+            sw += self.w[k];
+        }
+        let c = c / sw;
+        r[..self.n]
+            .iter()
+            .fold(0.0, |a, &v| f64::max(a, (v - c).abs()))
+    }
+
+    /// The symmetric `P` minimizing `Σ_k w_k (l_k − c − x_kᵀ P x_k)²` (the constant `c` is
+    /// absorbed in `P`'s trace, since `xᵀ x = 1`): the weighted least-squares fit of a Bingham
+    /// exponent to the log-likelihood at the samples. Exact when `log L` is such an exponent.
+    #[allow(clippy::needless_range_loop)] // small dense normal equations
+    fn fit_exponent(&self) -> Mat<D> {
+        let nu = D * (D + 1) / 2;
+        let hi = self.l[..self.n]
+            .iter()
+            .fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+        let mut a = [0.0; MAX_UNKNOWNS * MAX_UNKNOWNS];
+        let mut b = [0.0; MAX_UNKNOWNS];
+        let mut phi = [0.0; MAX_UNKNOWNS];
+        for k in 0..self.n {
+            let x = &self.x[k];
+            let mut u = 0;
+            for i in 0..D {
+                for j in i..D {
+                    phi[u] = if i == j {
+                        x[i] * x[i]
+                    } else {
+                        2.0 * x[i] * x[j]
+                    };
+                    u += 1;
+                }
+            }
+            let (w, l) = (self.w[k], self.l[k] - hi);
+            for r in 0..nu {
+                b[r] += w * l * phi[r];
+                for c in 0..nu {
+                    a[r * nu + c] += w * phi[r] * phi[c];
+                }
+            }
+        }
+        // A tiny ridge keeps the normal equations definite when there are fewer samples than
+        // unknowns (the 2d − 1 fallback points).
+        let tr: f64 = (0..nu).map(|r| a[r * nu + r]).sum();
+        for r in 0..nu {
+            a[r * nu + r] += 1e-12 * tr / nu as f64;
+        }
+        cholesky_solve(&mut a[..nu * nu], &mut b[..nu], nu);
+        let mut p = Mat::<D>::zeros();
+        let mut u = 0;
+        for i in 0..D {
+            for j in i..D {
+                p[(i, j)] = b[u];
+                p[(j, i)] = b[u];
+                u += 1;
+            }
+        }
+        p
+    }
+}
+
+/// Solves `A x = b` in place (`A` symmetric positive definite, n×n row-major; `b` becomes `x`).
+#[allow(clippy::needless_range_loop)]
+fn cholesky_solve(a: &mut [f64], b: &mut [f64], n: usize) {
+    for j in 0..n {
+        let mut d = a[j * n + j];
+        for k in 0..j {
+            d -= a[j * n + k] * a[j * n + k];
+        }
+        let d = d.max(f64::MIN_POSITIVE).sqrt();
+        a[j * n + j] = d;
+        for i in j + 1..n {
+            let mut v = a[i * n + j];
+            for k in 0..j {
+                v -= a[i * n + k] * a[j * n + k];
+            }
+            a[i * n + j] = v / d;
+        }
+    }
+    for i in 0..n {
+        let mut v = b[i];
+        for k in 0..i {
+            v -= a[i * n + k] * b[k];
+        }
+        b[i] = v / a[i * n + i];
+    }
+    for i in (0..n).rev() {
+        let mut v = b[i];
+        for k in i + 1..n {
+            v -= a[k * n + i] * b[k];
+        }
+        b[i] = v / a[i * n + i];
+    }
+}
 
 /// A recursive Bingham filter for `d = 2` (axes) or `d = 4` (unit quaternions).
 ///
@@ -274,26 +402,38 @@ impl BinghamFilter {
 
     /// Nonlinear Bayes update: posterior `∝ prior(x) · L(x)`, with `log_l(x)` returning
     /// `Ok(log L(x))` for a unit vector `x` (length d; `L(−x) = L(x)` is the caller's
-    /// contract) or `Err(message)` on failure.
+    /// contract) or `Err(message)` on failure. Log-likelihoods, so sharp likelihoods do not
+    /// underflow.
     ///
-    /// Progressive (tempered) update: the likelihood is applied as `L^{Δβ_1}`, `L^{Δβ_2}`, …
-    /// with `Σ Δβ = 1`; each step takes the deterministic samples
-    /// ([`Scheme::Moments`](crate::deterministic::Scheme::Moments)) of the current
-    /// approximation, reweights them by `L^{Δβ}` and refits the Bingham distribution to the
-    /// weighted second moment. `Δβ` is chosen so that no step changes the ratio of two weights
-    /// by more than `e^{TEMPERING_SPREAD}` ([`TEMPERING_SPREAD`]), so a likelihood much sharper
-    /// than the prior is approached in several steps instead of collapsing onto one point. A
-    /// likelihood as broad as the prior takes one step (19 calls of `log_l` for d = 4); one
-    /// with a tenth of the prior's angular spread about ten. At most
-    /// [`MAX_TEMPERING_STEPS`] steps; beyond that `Error::NotConverged`.
+    /// The algorithm (each round calls `log_l` at the deterministic samples of the current
+    /// approximation, [`Scheme::Moments`](crate::deterministic::Scheme::Moments): 3 points for
+    /// d = 2, 19 for d = 4):
     ///
-    /// Reliable where the posterior is close to a Bingham distribution (unimodal up to the
-    /// antipodal symmetry); a likelihood with several separated modes gets a single-mode fit.
-    /// Accuracy is measured in `tests/nonlinear.rs` against a 10⁶-particle Monte Carlo
-    /// reference.
+    /// 1. **Progressive (tempered) linearization.** Fit a Bingham exponent `xᵀ P x` to `log L`
+    ///    at the samples (weighted least squares) and multiply the current approximation by
+    ///    `exp(Δβ xᵀ P x)` (an exact Bayes product), with `Δβ` chosen so that the applied
+    ///    exponent varies by at most [`TEMPERING_SPREAD`] over the samples; repeat with the new
+    ///    approximation's samples until `Σ Δβ = 1`. A likelihood much sharper than the prior is
+    ///    thus approached in several steps (about 20 for a tenth of the prior's spread) and
+    ///    never collapses onto one sample; where the exponent fits `log L` exactly (a Bingham
+    ///    likelihood) the whole likelihood is applied in one step, and the result is the exact
+    ///    product.
+    /// 2. **Importance correction** ([`CORRECTION_PASSES`] rounds): reweight the samples of the
+    ///    approximation by `prior · L / approximation` and fit the Bingham distribution to their
+    ///    second moment (moment matching; the weights are constant when the approximation is the
+    ///    posterior, so an exact result stays exact).
+    ///
+    /// Reliable where the posterior is close to a Bingham distribution: measured in
+    /// `tests/nonlinear.rs` against a 10⁶-particle Monte Carlo reference with a camera
+    /// likelihood, the posterior mode agrees within two of the reference's standard errors for
+    /// a prior of 0.14 rad spread and likelihoods of 1 to 0.1 times that spread; for a broad
+    /// prior (0.42 rad) the posterior is visibly non-Bingham and the fit's mode is off by up to
+    /// 0.016 rad. A multimodal likelihood gets a single-mode fit. At most
+    /// [`MAX_TEMPERING_STEPS`] steps; beyond that `Error::NotConverged`. Calls of `log_l`:
+    /// `(steps + CORRECTION_PASSES) × samples` (57 for a Bingham likelihood, d = 4).
     ///
     /// Errors: [`Error::Callback`] (failure or a non-finite value), `NotConverged`, and the
-    /// moment-matching errors. On error the filter is unchanged.
+    /// moment-matching errors. On error the filter is unchanged. No heap allocation.
     pub fn update_nonlinear<L>(&mut self, mut log_l: L) -> Result<()>
     where
         L: FnMut(&[f64]) -> std::result::Result<f64, String>,
@@ -578,55 +718,112 @@ impl<const D: usize> Core<D> {
         Ok(())
     }
 
+    /// The deterministic samples of `Bingham(m, z)` with the log-likelihood at each.
+    fn samples_with_log_l<L>(
+        m: &Mat<D>,
+        z: &Vect<D>,
+        log_l: &mut L,
+        iteration: usize,
+        out: &mut Samples<D>,
+    ) -> Result<()>
+    where
+        L: FnMut(&[f64]) -> std::result::Result<f64, String>,
+    {
+        out.n = 0;
+        Self::for_each_sample(m, z, |x, wt| {
+            let l = log_l(x.as_slice()).map_err(|msg| {
+                Error::Callback(format!(
+                    "log-likelihood failed at {x:?} (linearization {iteration}): {msg}",
+                    x = x.as_slice()
+                ))
+            })?;
+            if !l.is_finite() {
+                return Err(Error::Callback(format!(
+                    "log-likelihood returned {l} at {x:?}: not finite",
+                    x = x.as_slice()
+                )));
+            }
+            let k = out.n;
+            out.x[k] = *x;
+            out.w[k] = wt;
+            out.l[k] = l;
+            out.n += 1;
+            Ok(())
+        })
+    }
+
+    /// The moment-matched posterior from the deterministic samples of its approximation
+    /// `Bingham(m, z)`: the samples are reweighted by `prior(x) L(x) / approximation(x)` (close
+    /// to constant when the approximation is good, and exactly constant when it is the
+    /// posterior) and the Bingham distribution with their second moment is fitted.
+    #[allow(clippy::needless_range_loop)] // parallel arrays
+    fn importance_correction<L>(
+        &self,
+        m: &Mat<D>,
+        z: &Vect<D>,
+        log_l: &mut L,
+        samples: &mut Samples<D>,
+        step: usize,
+    ) -> Result<(Mat<D>, Vect<D>)>
+    where
+        L: FnMut(&[f64]) -> std::result::Result<f64, String>,
+    {
+        Self::samples_with_log_l(m, z, log_l, step, samples)?;
+        let prior = congruence(&self.m, &self.z);
+        let approx = congruence(m, z);
+        let mut lr = [0.0; MAX_SAMPLES];
+        let mut top = f64::NEG_INFINITY;
+        for k in 0..samples.n {
+            let x = &samples.x[k];
+            let e = (x.transpose() * (prior - approx) * x)[(0, 0)];
+            lr[k] = samples.l[k] + e;
+            top = top.max(lr[k]);
+        }
+        let mut s = Mat::<D>::zeros();
+        for k in 0..samples.n {
+            let x = &samples.x[k];
+            s.ger(samples.w[k] * (lr[k] - top).exp(), x, x, 1.0);
+        }
+        let (m_new, z_new, _) = fit_second_moment(&s, None)?;
+        Ok((m_new, z_new))
+    }
+
     fn update_nonlinear<L>(&mut self, log_l: &mut L) -> Result<()>
     where
         L: FnMut(&[f64]) -> std::result::Result<f64, String>,
     {
+        let mut samples = Samples::<D>::new();
         let (mut m, mut z) = (self.m, self.z);
         let mut remaining = 1.0f64;
-        let mut warm: Option<Derivs<Const<D>>> = None;
         for step in 0..MAX_TEMPERING_STEPS {
-            let mut xs = [Vect::<D>::zeros(); MAX_SAMPLES];
-            let mut ws = [0.0; MAX_SAMPLES];
-            let mut ls = [0.0; MAX_SAMPLES];
-            let mut n = 0usize;
-            Self::for_each_sample(&m, &z, |x, wt| {
-                let l = log_l(x.as_slice()).map_err(|msg| {
-                    Error::Callback(format!(
-                        "log-likelihood failed at {x:?} (tempering step {step}): {msg}",
-                        x = x.as_slice()
-                    ))
-                })?;
-                if !l.is_finite() {
-                    return Err(Error::Callback(format!(
-                        "log-likelihood returned {l} at {x:?}: not finite",
-                        x = x.as_slice()
-                    )));
-                }
-                xs[n] = *x;
-                ws[n] = wt;
-                ls[n] = l;
-                n += 1;
-                Ok(())
-            })?;
-            let hi = ls[..n].iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-            let lo = ls[..n].iter().fold(f64::INFINITY, |a, &b| a.min(b));
+            Self::samples_with_log_l(&m, &z, log_l, step, &mut samples)?;
+            let p = samples.fit_exponent();
+            // The fitted exponent's spread over the samples decides the step.
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for k in 0..samples.n {
+                let x = &samples.x[k];
+                let q = (x.transpose() * p * x)[(0, 0)];
+                lo = lo.min(q);
+                hi = hi.max(q);
+            }
             let spread = hi - lo;
-            let last = spread * remaining <= TEMPERING_SPREAD;
+            // Where the exponent fits log L at every sample (to rounding: log L is a Bingham
+            // exponent there), the rest of the likelihood is applied at once.
+            let misfit = samples.misfit(&p);
+            let last = spread * remaining <= TEMPERING_SPREAD || misfit <= 1e-9 * spread;
             let db = if last {
                 remaining
             } else {
                 TEMPERING_SPREAD / spread
             };
-            let mut s = Mat::<D>::zeros();
-            for k in 0..n {
-                s.ger(ws[k] * (db * (ls[k] - hi)).exp(), &xs[k], &xs[k], 1.0);
-            }
-            let (m_new, z_new, solution) = fit_second_moment(&s, warm.as_ref())?;
+            let (m_new, z_new) = bayes_product(&m, &z, &(p * db))?;
             m = m_new;
             z = z_new;
-            warm = Some(solution);
             if last {
+                for pass in 0..CORRECTION_PASSES {
+                    (m, z) =
+                        self.importance_correction(&m, &z, log_l, &mut samples, step + 1 + pass)?;
+                }
                 self.m = m;
                 self.z = z;
                 return Ok(());

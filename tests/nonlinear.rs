@@ -19,10 +19,6 @@ fn row_major(m: &DMatrix<f64>) -> Vec<f64> {
     (0..d * d).map(|k| m[(k / d, k % d)]).collect()
 }
 
-fn state_of(f: &BinghamFilter) -> Bingham {
-    f.state()
-}
-
 /// `exp` of a rotation vector as a unit quaternion.
 fn exp_q(v: &[f64; 3]) -> [f64; 4] {
     let a = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
@@ -63,6 +59,7 @@ fn setup(seed: u64, z: &[f64]) -> (Vec<f64>, Vec<f64>) {
     (row_major(&r.orthogonal(z.len())), z.to_vec())
 }
 
+#[allow(clippy::needless_range_loop)]
 fn noise4() -> (Vec<f64>, Vec<f64>) {
     let mut m = vec![0.0; 16];
     for i in 0..4 {
@@ -205,20 +202,6 @@ fn compose_second_moments(a: &DMatrix<f64>, b: &DMatrix<f64>) -> DMatrix<f64> {
     c
 }
 
-/// The right-multiplication matrix `R(q)`: `x ⊗ q = R(q) x`.
-fn right4(q: &[f64; 4]) -> DMatrix<f64> {
-    let mut r = DMatrix::zeros(4, 4);
-    for j in 0..4 {
-        let mut e = [0.0; 4];
-        e[j] = 1.0;
-        let c = mul(&e, q);
-        for i in 0..4 {
-            r[(i, j)] = c[i];
-        }
-    }
-    r
-}
-
 /// The even monomials of degree 2 and 4 in the principal coordinates `y = Mᵀ x`, centred by
 /// their exact expectations (from `ω` and the Hessian of log F): control variates with known
 /// mean zero.
@@ -231,6 +214,7 @@ struct Controls {
 }
 
 impl Controls {
+    #[allow(clippy::needless_range_loop)]
     fn new(b: &Bingham) -> Controls {
         let ev = bingham::normalization::evaluate(b.z().as_slice(), Method::Exact, true).unwrap();
         let (w, h) = (&ev.grad, &ev.hess);
@@ -396,5 +380,274 @@ fn nonlinear_prediction_against_monte_carlo() {
         // Ours agrees with the reference within its noise; the TAC 2016 points do not.
         assert!(e_ours <= 3.0 * se, "ours {e_ours:e}, standard error {se:e}");
         assert!(e_ours * 10.0 <= e_tac, "ours {e_ours:e}, TAC {e_tac:e}");
+    }
+}
+
+/// A camera at the origin looking along the world z axis sees the body-fixed direction `b`
+/// (rotated into the world by the orientation) through a pinhole: normalized image coordinates
+/// `(p_x / p_z, p_y / p_z)`, `p = R(x) b`.
+fn project(x: &[f64], b: &[f64; 3]) -> [f64; 2] {
+    let p = rotate(&[x[0], x[1], x[2], x[3]], b);
+    [p[0] / p[2], p[1] / p[2]]
+}
+
+/// Gaussian pixel noise `sigma` on the projection; a direction behind the camera gets the
+/// log-likelihood of a residual of 10 (finite, tiny).
+fn camera_log_l(x: &[f64], b: &[f64; 3], meas: &[f64; 2], sigma: f64) -> f64 {
+    let p = rotate(&[x[0], x[1], x[2], x[3]], b);
+    let r2 = if p[2] <= 1e-3 {
+        100.0
+    } else {
+        let h = [p[0] / p[2], p[1] / p[2]];
+        (h[0] - meas[0]).powi(2) + (h[1] - meas[1]).powi(2)
+    };
+    -0.5 * r2 / (sigma * sigma)
+}
+
+/// The rotation angle between two orientations (axes): `2 acos |⟨p, q⟩|`.
+fn angle(p: &[f64], q: &[f64]) -> f64 {
+    let c: f64 = p.iter().zip(q).map(|(a, b)| a * b).sum::<f64>().abs();
+    2.0 * c.min(1.0).acos()
+}
+
+fn top_eigenvector(s: &DMatrix<f64>) -> Vec<f64> {
+    let e = s.clone().symmetric_eigen();
+    let k = e.eigenvalues.imax();
+    e.eigenvectors.column(k).iter().copied().collect()
+}
+
+/// Monte Carlo posterior: `n` prior samples weighted by the likelihood; the mode (the top
+/// eigenvector of the weighted second moment) and its standard error (20 batches: the rotation
+/// angle of each batch's mode from the full one, root-mean-square over `√(B − 1)`).
+fn monte_carlo_posterior(
+    prior: &Bingham,
+    log_l: &dyn Fn(&[f64]) -> f64,
+    n: usize,
+    seed: u64,
+) -> (Vec<f64>, f64, f64) {
+    let mut rng = StdRng::seed_from_u64(seed);
+    const BATCHES: usize = 20;
+    let per = n / BATCHES;
+    let mut batch = Vec::new();
+    let mut all: Vec<(DVector<f64>, f64)> = Vec::with_capacity(n);
+    for _ in 0..BATCHES {
+        let xs = prior.sample(&mut rng, per);
+        let ls: Vec<f64> = xs.iter().map(|x| log_l(x.as_slice())).collect();
+        let hi = ls.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+        let mut s = DMatrix::zeros(4, 4);
+        for (x, &l) in xs.iter().zip(&ls) {
+            outer_add(&mut s, x.as_slice(), (l - hi).exp());
+        }
+        batch.push(top_eigenvector(&s));
+        all.extend(xs.into_iter().zip(ls));
+    }
+    let hi = all.iter().fold(f64::NEG_INFINITY, |a, b| a.max(b.1));
+    let mut s = DMatrix::zeros(4, 4);
+    let (mut sw, mut sw2) = (0.0, 0.0);
+    for (x, l) in &all {
+        let w = (l - hi).exp();
+        outer_add(&mut s, x.as_slice(), w);
+        sw += w;
+        sw2 += w * w;
+    }
+    let mode = top_eigenvector(&s);
+    let ms: f64 = batch.iter().map(|b| angle(b, &mode).powi(2)).sum::<f64>() / BATCHES as f64;
+    let se = (ms / (BATCHES - 1) as f64).sqrt();
+    (mode, se, sw * sw / sw2)
+}
+
+#[test]
+fn nonlinear_camera_update_against_monte_carlo() {
+    // A prior of 0.14 rad spread: the posterior mode agrees with the Monte Carlo reference's
+    // within two of its standard errors (the reference's own error is one standard error, so
+    // the difference of a perfect estimate is about that) for likelihoods from as broad as the
+    // prior down to a tenth of it.
+    camera_case(&[-400.0, -200.0, -100.0, 0.0], Some(2.0));
+    // A broad prior (0.42 rad): the posterior is visibly not a Bingham distribution and the
+    // single Bingham fit is off by up to 10 standard errors (measured, docs/accuracy.md); still
+    // 20x closer than the TAC 2016 points reweighted once.
+    camera_case(&[-40.0, -25.0, -12.0, 0.0], None);
+}
+
+fn camera_case(z: &[f64], within_se: Option<f64>) {
+    let (m, z) = setup(21, z);
+    // Turn the prior so that its mode is the identity (the camera sees `b` near its axis).
+    let m = {
+        let mm = DMatrix::from_row_slice(4, 4, &m);
+        let mode = [mm[(0, 3)], mm[(1, 3)], mm[(2, 3)], mm[(3, 3)]];
+        let back = conj(&mode);
+        let l = DMatrix::from_fn(4, 4, |i, j| {
+            let mut e = [0.0; 4];
+            e[j] = 1.0;
+            mul(&back, &e)[i]
+        });
+        row_major(&(l * mm))
+    };
+    let prior = Bingham::from_row_major(4, &m, &z).unwrap();
+    // The prior's angular spread: the rotation angle's standard deviation about the broadest
+    // principal axis, 2 √ω_max (small-angle).
+    let w = prior.omega().unwrap();
+    let spread = 2.0 * w[2].sqrt();
+    let b = {
+        let v = [0.3, -0.2, 1.0];
+        let n: f64 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+        [v[0] / n.sqrt(), v[1] / n.sqrt(), v[2] / n.sqrt()]
+    };
+    // The truth: a draw from the prior; the measurement: its projection plus noise.
+    let mut rng = StdRng::seed_from_u64(99);
+    let truth = prior.sample(&mut rng, 1).remove(0);
+    let mut r = Rng64(5);
+    for (k, ratio) in [1.0, 0.3, 0.1].iter().enumerate() {
+        let sigma = ratio * spread;
+        let h = project(truth.as_slice(), &b);
+        let meas = [h[0] + sigma * r.normal(), h[1] + sigma * r.normal()];
+        let log_l = |x: &[f64]| camera_log_l(x, &b, &meas, sigma);
+        let mut f = BinghamFilter::new(4, &m, &z).unwrap();
+        let mut calls = 0usize;
+        f.update_nonlinear(|x| {
+            calls += 1;
+            Ok(log_l(x))
+        })
+        .unwrap();
+        let ours: Vec<f64> = f.mode().to_vec();
+        // TAC 2016 in one step: reweight its points by L and refit.
+        let tac = {
+            let s = prior
+                .deterministic_samples(Scheme::Tac2016 { lambda: 0.5 })
+                .unwrap();
+            let ls: Vec<f64> = s.points.chunks(4).map(log_l).collect();
+            let hi = ls.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+            let mut c = DMatrix::zeros(4, 4);
+            for ((x, &wk), &l) in s.points.chunks(4).zip(&s.weights).zip(&ls) {
+                outer_add(&mut c, x, wk * (l - hi).exp());
+            }
+            top_eigenvector(&c)
+        };
+        let (mc, se, ess) = monte_carlo_posterior(&prior, &log_l, 1_000_000, 700 + k as u64);
+        let (e_ours, e_tac) = (angle(&ours, &mc), angle(&tac, &mc));
+        println!(
+            "camera update, prior z {z:?}, likelihood spread {ratio} x prior ({sigma:.3} rad): posterior mode \
+             vs Monte Carlo: ours {e_ours:.2e} rad ({calls} likelihood calls), TAC 2016 one \
+             step {e_tac:.2e} rad; Monte Carlo standard error {se:.2e} rad (ESS {ess:.0})"
+        );
+        if let Some(k) = within_se {
+            assert!(e_ours <= k * se, "{e_ours:e} > {k} x {se:e}");
+        }
+        assert!(e_ours * 10.0 <= e_tac, "ours {e_ours:e}, TAC {e_tac:e}");
+    }
+}
+
+/// A log-likelihood that is a Bingham exponent `xᵀ P x`: the update is the exact Bayes product
+/// (`Bingham::multiply`), whatever the likelihood's sharpness; the Monte Carlo reference agrees
+/// within its standard error (a check of the reference itself).
+#[test]
+fn bingham_likelihood_update_is_the_exact_product() {
+    let (m, z) = setup(31, &[-40.0, -25.0, -12.0, 0.0]);
+    let prior = Bingham::from_row_major(4, &m, &z).unwrap();
+    for (k, scale) in [1.0, 10.0, 100.0, 1e4].iter().enumerate() {
+        let mut r = Rng64(40 + k as u64);
+        let ml = r.orthogonal(4);
+        let zl = [-3.0 * scale, -2.0 * scale, -1.0 * scale, 0.0];
+        let like = Bingham::from_row_major(4, &row_major(&ml), &zl).unwrap();
+        let p = &ml * DMatrix::from_diagonal(&DVector::from_row_slice(&zl)) * ml.transpose();
+        let log_l = |x: &[f64]| {
+            let v = DVector::from_row_slice(x);
+            (v.transpose() * &p * &v)[(0, 0)]
+        };
+        let exact = prior.multiply(&like).unwrap();
+        let mut f = BinghamFilter::new(4, &m, &z).unwrap();
+        let mut calls = 0;
+        f.update_nonlinear(|x| {
+            calls += 1;
+            Ok(log_l(x))
+        })
+        .unwrap();
+        let ours = f.state();
+        let zerr = (0..3)
+            .map(|i| common::rel(ours.z()[i], exact.z()[i], 1e-300))
+            .fold(0.0, f64::max);
+        let mode_err = angle(ours.mode().as_slice(), exact.mode().as_slice());
+        let (mc, se, _) = monte_carlo_posterior(&prior, &log_l, 200_000, 900 + k as u64);
+        let mc_err = angle(&mc, exact.mode().as_slice());
+        println!(
+            "Bingham likelihood x{scale}: z relative {zerr:.1e}, mode {mode_err:.1e} rad \
+             ({calls} calls); Monte Carlo mode {mc_err:.1e} rad (standard error {se:.1e})"
+        );
+        assert!(zerr < 1e-8 && mode_err < 1e-8);
+    }
+}
+
+/// Failing, non-finite or non-unit callback results: `Error::Callback`, the filter unchanged
+/// (bit for bit), also when the failure comes on a later call (a later tempering step).
+#[test]
+fn failing_callbacks_leave_the_filter_unchanged() {
+    let (m, z) = setup(51, &[-40.0, -25.0, -12.0, 0.0]);
+    let (mw, zw) = noise4();
+    let f0 = BinghamFilter::new(4, &m, &z).unwrap();
+    let same = |f: &BinghamFilter| {
+        let (a, b) = (f.state(), f0.state());
+        a.m() == b.m() && a.z() == b.z()
+    };
+    for fail_at in [0usize, 5, 18] {
+        let mut f = f0.clone();
+        let mut k = 0;
+        let e = f
+            .predict_nonlinear(
+                |x, out| {
+                    k += 1;
+                    out.copy_from_slice(x);
+                    if k > fail_at {
+                        Err("user failure".into())
+                    } else {
+                        Ok(())
+                    }
+                },
+                &mw,
+                &zw,
+            )
+            .unwrap_err();
+        assert!(matches!(e, Error::Callback(_)), "{e}");
+        assert!(same(&f));
+        for bad in [f64::NAN, f64::INFINITY, 1.5] {
+            let mut k = 0;
+            let e = f
+                .predict_nonlinear(
+                    |x, out| {
+                        k += 1;
+                        out.copy_from_slice(x);
+                        if k > fail_at {
+                            out[0] = if bad == 1.5 { x[0] * 1.5 + 0.5 } else { bad };
+                        }
+                        Ok(())
+                    },
+                    &mw,
+                    &zw,
+                )
+                .unwrap_err();
+            assert!(matches!(e, Error::Callback(_)), "{e}");
+            assert!(same(&f));
+        }
+    }
+    // The update: failure on the first call, on the second, and in the final correction passes
+    // (this Bingham-form likelihood takes one step and two corrections: 57 calls).
+    for fail_at in [0usize, 1, 40] {
+        for bad in [None, Some(f64::NAN), Some(f64::NEG_INFINITY)] {
+            let mut f = f0.clone();
+            let mut k = 0;
+            let e = f
+                .update_nonlinear(|x| {
+                    k += 1;
+                    if k <= fail_at {
+                        return Ok(-1e4 * (1.0 - x[0] * x[0]));
+                    }
+                    match bad {
+                        None => Err("user failure".into()),
+                        Some(v) => Ok(v),
+                    }
+                })
+                .unwrap_err();
+            assert!(matches!(e, Error::Callback(_)), "{e}");
+            assert!(same(&f));
+        }
     }
 }
