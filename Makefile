@@ -76,6 +76,8 @@ demo: build venv
 	$(PYTHON) scripts/plot_run.py $(DEMO_DIR)/axis_tracking_run.csv $(DEMO_DIR)/axis_tracking_run.svg
 	@echo; echo "==== examples/python/track_quaternion.py (20 runs, the package installed by \`make venv\`)"
 	@$(VENV_PYTHON) examples/python/track_quaternion.py 20
+	@echo; echo "==== examples/python/nonlinear.py (nonlinear rate law + pinhole camera)"
+	@$(VENV_PYTHON) examples/python/nonlinear.py
 
 # Orientation accuracy on real IMU data (BROAD, CC BY 4.0): our AHRS against VQF, Madgwick and
 # Mahony (the peers need the Python packages vqf and ahrs: `make deps`); plot of trial 07.

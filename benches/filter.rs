@@ -10,7 +10,7 @@ mod common;
 
 use bingham::filter::BinghamFilter;
 use common::{scenario_2d, scenario_4d, simulate, Scenario};
-use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use criterion::{black_box, criterion_group, criterion_main, BatchSize, Criterion};
 
 fn measurements(sc: &Scenario) -> Vec<Vec<f64>> {
     (0..10).flat_map(|r| simulate(sc, r).1).collect()
@@ -51,9 +51,83 @@ fn bench_step(c: &mut Criterion, name: &str, sc: &Scenario) {
     g.finish();
 }
 
+/// The prediction alone: linear, and nonlinear with a trivial (identity) transition and with a
+/// rotation (issue 12 target: nonlinear d = 4 with a trivial callback ≤ 2 × linear). Each
+/// iteration predicts from the same warmed-up state (a clone made outside the timing).
+fn bench_predict(c: &mut Criterion, name: &str, sc: &Scenario) {
+    let meas = measurements(sc);
+    let mut f = BinghamFilter::new(sc.d, &sc.m0, &sc.z0).unwrap();
+    for z in &meas[..50] {
+        f.predict(&sc.mw, &sc.zw).unwrap();
+        f.update(z, &sc.mv, &sc.zv).unwrap();
+    }
+    let d = sc.d;
+    let mut g = c.benchmark_group("filter_predict");
+    g.bench_function(format!("{name} predict"), |b| {
+        b.iter_batched(
+            || f.clone(),
+            |mut h| {
+                h.predict(black_box(&sc.mw), black_box(&sc.zw)).unwrap();
+                h
+            },
+            BatchSize::SmallInput,
+        )
+    });
+    g.bench_function(format!("{name} predict_nonlinear identity"), |b| {
+        b.iter_batched(
+            || f.clone(),
+            |mut h| {
+                h.predict_nonlinear(
+                    |x, out| {
+                        out.copy_from_slice(x);
+                        Ok(())
+                    },
+                    black_box(&sc.mw),
+                    black_box(&sc.zw),
+                )
+                .unwrap();
+                h
+            },
+            BatchSize::SmallInput,
+        )
+    });
+    // A fixed rotation by 0.1 rad (complex / quaternion product), as a nonlinear model would.
+    let (c1, s1) = (0.05f64.cos(), 0.05f64.sin());
+    g.bench_function(format!("{name} predict_nonlinear rotation"), |b| {
+        b.iter_batched(
+            || f.clone(),
+            |mut h| {
+                h.predict_nonlinear(
+                    |x, out| {
+                        if d == 2 {
+                            out[0] = x[0] * c1 - x[1] * s1;
+                            out[1] = x[0] * s1 + x[1] * c1;
+                        } else {
+                            // x ⊗ (c, 0, 0, s)
+                            out[0] = x[0] * c1 - x[3] * s1;
+                            out[1] = x[1] * c1 + x[2] * s1;
+                            out[2] = x[2] * c1 - x[1] * s1;
+                            out[3] = x[3] * c1 + x[0] * s1;
+                        }
+                        Ok(())
+                    },
+                    black_box(&sc.mw),
+                    black_box(&sc.zw),
+                )
+                .unwrap();
+                h
+            },
+            BatchSize::SmallInput,
+        )
+    });
+    g.finish();
+}
+
 fn bench(c: &mut Criterion) {
     bench_step(c, "d2", &scenario_2d());
     bench_step(c, "d4", &scenario_4d());
+    bench_predict(c, "d2", &scenario_2d());
+    bench_predict(c, "d4", &scenario_4d());
 }
 
 criterion_group! {

@@ -101,11 +101,12 @@ class Binding(unittest.TestCase):
             4: "not converged",
             5: "numerical failure",
             6: "internal error (panic)",
+            7: "callback failed",
         }
         for code, text in names.items():
             self.assertEqual(bh.status_str(code), text)
             self.assertEqual(int(bh.Status(code)), code)
-        for code in (7, -1, 10**6):
+        for code in (8, -1, 10**6):
             self.assertEqual(bh.status_str(code), "unknown status")
 
 
