@@ -29,11 +29,19 @@
 //!   reproduced exactly (to rounding): `1 + 2(d − 1) + 2(d − 1)(d − 2)` points (3, 9, 19 for
 //!   d = 2, 3, 4). For a concentrated distribution it is the degree-5 Gaussian cubature with
 //!   points at `±√3 σ` on the principal axes and `(±√3 σ_i, ±√3 σ_j)` on their pairs, which it
-//!   tends to. The weights are positive for every `z` tried with d = 2 and 3; for d = 4 they are
-//!   positive unless two directions are much sharper than a third, broad one (e.g.
-//!   `z = (−1e4, −400, −0.5, 0)`: a "girdle" with two sharp axes), where no positive set of this
-//!   shape exists. There, and wherever a weight would be negative or a quantity underflows
-//!   (|z| beyond about 1e150), the scheme returns the `2d − 1` points of `Tac2016` with
+//!   tends to.
+//!
+//!   Where a weight of that set would be negative — a "girdle": two directions much sharper
+//!   than a third, broad one, e.g. every predicted state of the JAIF d = 4 scenario,
+//!   `z ≈ (−150, −150, −2, 0)` — the broad axis `b = d − 2` joins the mode in a three-point
+//!   circle rule: centers `e_{d−1}` and `(e_{d−1} ± τ e_b)/‖·‖` with `τ² = E[y_b⁴] / E[y_b² y_{d−1}²]`,
+//!   pairs `(c ± t_i e_i)/‖·‖` around each center `c` for the other axes, quadruples around
+//!   `e_{d−1}`; again every second and fourth moment in closed form, with the same count.
+//!   Over random `z` (`tests/deterministic.rs`: `z_i = −10^u`, `u` uniform in `[−1, 7]`) one of
+//!   the two sets is positive for every `z` with d = 2 and 3 and for 95 % with d = 4 (the
+//!   JAIF states included). In the remaining cases (a very broad axis next to a moderately
+//!   sharp one, e.g. `z = (−25.6, −6.8, −0.017, 0)`) and wherever a quantity underflows
+//!   (|z| beyond about 1e150) the scheme returns the `2d − 1` points of `Tac2016` with
 //!   `λ = 1/2` instead, which reproduce the second moment only, and says so
 //!   ([`Reproduced::SecondMoment`]).
 //!
@@ -59,7 +67,7 @@ pub enum Scheme {
         lambda: f64,
     },
     /// The moment-matched scheme: `2d² − 4d + 3` points reproducing every second and fourth
-    /// moment, or (where no positive set of that shape exists) the `2d − 1` points of
+    /// moment, or (where no positive set of either shape exists) the `2d − 1` points of
     /// `Tac2016 { lambda: 0.5 }`.
     Moments,
 }
@@ -116,7 +124,24 @@ pub(crate) struct Plan<const N: usize> {
     t2: [f64; N],
     w1: [f64; N],
     quads: bool,
+    /// The girdle variant: three centers `e_{d−1}` (weight `w0`) and
+    /// `(e_{d−1} ± τ e_{d−2})/‖·‖` (weight `center_w` each), pairs around each center.
+    girdle: Option<Girdle<N>>,
     reproduced: Reproduced,
+}
+
+/// The girdle variant's extra parameters (see [`Plan::girdle`]).
+#[derive(Debug, Clone)]
+struct Girdle<const N: usize> {
+    /// `τ²`.
+    tau2: f64,
+    /// Weight of each of the two outer centers.
+    center_w: f64,
+    /// Weight of each pair point around each outer center, per sharp axis.
+    outer_w: [f64; N],
+    /// The pairs' squared gnomonic offsets `t_i²`, per sharp axis (the plan's `t2` holds the
+    /// quadruples' geometry).
+    pair_t2: [f64; N],
 }
 
 impl<const N: usize> Plan<N> {
@@ -162,7 +187,9 @@ pub(crate) fn plan<const N: usize>(
         }
         Scheme::Moments => {
             log_normalization_into(z, Method::Exact, Some(&mut *grad), Some(&mut *hess))?;
-            Ok(moments_plan(grad, hess).unwrap_or_else(|| tac_plan(grad, 0.5)))
+            Ok(moments_plan(grad, hess)
+                .or_else(|| girdle_plan(grad, hess))
+                .unwrap_or_else(|| tac_plan(grad, 0.5)))
         }
     }
 }
@@ -177,6 +204,7 @@ fn tac_plan<const N: usize>(w: &[f64], lambda: f64) -> Plan<N> {
         t2: [0.0; N],
         w1: [0.0; N],
         quads: false,
+        girdle: None,
         reproduced: Reproduced::SecondMoment,
     };
     let spread = (1.0 - lambda) * w[d - 1] / (d - 1) as f64;
@@ -207,6 +235,7 @@ fn moments_plan<const N: usize>(w: &[f64], hess: &[f64]) -> Option<Plan<N>> {
         t2: [0.0; N],
         w1: [0.0; N],
         quads: true,
+        girdle: None,
         reproduced: Reproduced::FourthMoments,
     };
     // t_i² = E[y_i⁴] / E[y_i² y_d²] (E[y_i⁴] = H_ii + ω_i² directly: the equivalent
@@ -260,6 +289,108 @@ fn moments_plan<const N: usize>(w: &[f64], hess: &[f64]) -> Option<Plan<N>> {
     Some(p)
 }
 
+/// The girdle variant of the moment-matched plan for `d ≥ 3`: the broad axis `b = d − 2` joins
+/// the mode in a three-point circle rule (centers `e_d` and `(e_d ± τ e_b)/‖·‖`), the other
+/// ("sharp") axes get pairs around each center and quadruples around `e_d`. With
+/// `τ² = E[y_b⁴] / E[y_b² y_d²]` and, per sharp axis, `t_i² = E[y_i²] / (E[y_i² y_b²] +
+/// E[y_i² y_d²]) − 1` (after the quadruples) every second and fourth moment is matched in
+/// closed form. `None` where a weight would be negative or not finite.
+#[allow(clippy::needless_range_loop)] // several arrays indexed together
+fn girdle_plan<const N: usize>(w: &[f64], hess: &[f64]) -> Option<Plan<N>> {
+    let d = w.len();
+    if d < 3 {
+        return None;
+    }
+    let (md, b) = (d - 1, d - 2);
+    let tau2 = fourth(hess, w, d, b, b) / fourth(hess, w, d, b, md);
+    if !(tau2.is_finite() && tau2 > 0.0) {
+        return None;
+    }
+    let (c3, c4) = (tau2 / (1.0 + tau2), 1.0 / (1.0 + tau2));
+    let mut p = Plan {
+        d,
+        w0: 0.0,
+        t2: [0.0; N],
+        w1: [0.0; N],
+        quads: true,
+        girdle: Some(Girdle {
+            tau2,
+            center_w: 0.0,
+            outer_w: [0.0; N],
+            pair_t2: [0.0; N],
+        }),
+        reproduced: Reproduced::FourthMoments,
+    };
+    // Quadruple geometry from the single-center estimate t_i² = E[y_i⁴] / E[y_i² (y_b² + y_d²)].
+    for i in 0..b {
+        let t2 = fourth(hess, w, d, i, i) / (fourth(hess, w, d, i, b) + fourth(hess, w, d, i, md));
+        if !(t2.is_finite() && t2 > 0.0) {
+            return None;
+        }
+        p.t2[i] = t2;
+    }
+    // Per sharp axis: E[y_i² (y_i² + Σ_{sharp j ≠ i} y_j²)] (= E[y_i²] − E[y_i² (y_b² + y_d²)],
+    // formed without that cancellation), E[y_i² y_b²] and E[y_i² y_d²], minus what the
+    // quadruples carry.
+    let mut r2 = [0.0; N];
+    let mut r4b = [0.0; N];
+    let mut r4d = [0.0; N];
+    for i in 0..b {
+        r2[i] = (0..b).map(|j| fourth(hess, w, d, i, j)).sum();
+        r4b[i] = fourth(hess, w, d, i, b);
+        r4d[i] = fourth(hess, w, d, i, md);
+    }
+    let mut total = 0.0;
+    // Broad-axis moments carried by the points other than the centers.
+    let (mut carried2, mut carried4) = (0.0, 0.0);
+    for i in 0..b {
+        for j in i + 1..b {
+            let (wq, yi2, yj2, yd2) = quad_weight(hess, w, &p.t2, d, i, j);
+            if !(wq.is_finite() && wq >= 0.0) {
+                return None;
+            }
+            r2[i] -= 4.0 * wq * yi2 * (yi2 + yj2);
+            r2[j] -= 4.0 * wq * yj2 * (yi2 + yj2);
+            r4d[i] -= 4.0 * wq * yi2 * yd2;
+            r4d[j] -= 4.0 * wq * yj2 * yd2;
+            total += 4.0 * wq;
+        }
+    }
+    let g = p.girdle.as_mut().expect("set above");
+    for i in 0..b {
+        // Pairs (c_k ± t e_i)/√(1 + t²): their y_i² y_b² and y_i² y_d² add up to y_i² / (1 + t²).
+        let t2 = r2[i] / (r4b[i] + r4d[i]);
+        let outer = r4b[i] * (1.0 + t2) * (1.0 + t2) / (4.0 * t2 * c3);
+        let inner = r4d[i] * (1.0 + t2) * (1.0 + t2) / (2.0 * t2) - 2.0 * outer * c4;
+        if !(t2.is_finite() && t2 > 0.0 && outer >= 0.0 && inner >= 0.0 && outer.is_finite()) {
+            return None;
+        }
+        g.pair_t2[i] = t2;
+        p.w1[i] = inner;
+        g.outer_w[i] = outer;
+        total += 2.0 * inner + 4.0 * outer;
+        // The outer pairs' share of y_b² and y_b² y_d².
+        let y_b2 = c3 / (1.0 + t2);
+        carried2 += 4.0 * outer * y_b2;
+        carried4 += 4.0 * outer * y_b2 * c4 / (1.0 + t2);
+    }
+    // The outer centers carry the rest of E[y_b²] (and with τ² as chosen, E[y_b² y_d²]).
+    let rest2 = w[b] - carried2;
+    let rest4 = fourth(hess, w, d, b, md) - carried4;
+    let center_w = rest2 / (2.0 * c3);
+    if !(center_w.is_finite() && center_w >= 0.0 && rest4 >= 0.0) {
+        return None;
+    }
+    g.center_w = center_w;
+    total += 2.0 * center_w;
+    let w0 = 1.0 - total;
+    if !(w0.is_finite() && w0 >= 0.0) {
+        return None;
+    }
+    p.w0 = w0;
+    Some(p)
+}
+
 /// The weight of each of the four quadruple points of axes `i < j` and their squared
 /// principal coordinates `(w, y_i², y_j², y_d²)`.
 fn quad_weight(
@@ -291,24 +422,38 @@ pub(crate) fn for_each_principal<const N: usize>(
     let mut y = [0.0; N];
     y[md] = 1.0;
     visit(&y[..d], plan.w0)?;
-    for i in 0..md {
-        let t2 = plan.t2[i];
-        let (c, s) = if t2.is_infinite() {
-            (0.0, 1.0)
-        } else {
-            let n = (1.0 + t2).sqrt();
-            (1.0 / n, t2.sqrt() / n)
-        };
-        for sign in [1.0, -1.0] {
-            y.fill(0.0);
-            y[md] = c;
-            y[i] = sign * s;
-            visit(&y[..d], plan.w1[i])?;
+    // Sharp axes (with quadruples) are 0..last; the girdle's broad axis d − 2 is a center axis.
+    let last = match &plan.girdle {
+        None => {
+            for i in 0..md {
+                pair(&mut y, d, plan.t2[i], None, i, plan.w1[i], &mut visit)?;
+            }
+            md
         }
-    }
+        Some(g) => {
+            let b = d - 2;
+            let (cb, cd) = (
+                (g.tau2 / (1.0 + g.tau2)).sqrt(),
+                (1.0 / (1.0 + g.tau2)).sqrt(),
+            );
+            for sign in [1.0, -1.0] {
+                y.fill(0.0);
+                y[md] = cd;
+                y[b] = sign * cb;
+                visit(&y[..d], g.center_w)?;
+            }
+            for i in 0..b {
+                let t2 = g.pair_t2[i];
+                pair(&mut y, d, t2, None, i, plan.w1[i], &mut visit)?;
+                pair(&mut y, d, t2, Some((cb, cd)), i, g.outer_w[i], &mut visit)?;
+                pair(&mut y, d, t2, Some((-cb, cd)), i, g.outer_w[i], &mut visit)?;
+            }
+            b
+        }
+    };
     if plan.quads {
-        for i in 0..md {
-            for j in i + 1..md {
+        for i in 0..last {
+            for j in i + 1..last {
                 let (wq, yi2, yj2, yd2) = quad_weight(hess, grad, &plan.t2, d, i, j);
                 let (a, b, c) = (yi2.sqrt(), yj2.sqrt(), yd2.sqrt());
                 for (si, sj) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
@@ -320,6 +465,37 @@ pub(crate) fn for_each_principal<const N: usize>(
                 }
             }
         }
+    }
+    Ok(())
+}
+
+/// Visits the two points `(c ± t e_i)/√(1 + t²)` (weight `w` each) around the center `c`:
+/// `e_{d−1}`, or (`center = Some((c_b, c_d))`) `c_b e_{d−2} + c_d e_{d−1}`. `t² = ∞` puts them
+/// on `±e_i`.
+fn pair(
+    y: &mut [f64],
+    d: usize,
+    t2: f64,
+    center: Option<(f64, f64)>,
+    i: usize,
+    w: f64,
+    visit: &mut impl FnMut(&[f64], f64) -> Result<()>,
+) -> Result<()> {
+    let (c, s) = if t2.is_infinite() {
+        (0.0, 1.0)
+    } else {
+        let n = (1.0 + t2).sqrt();
+        (1.0 / n, t2.sqrt() / n)
+    };
+    let (cb, cd) = center.unwrap_or((0.0, 1.0));
+    for sign in [1.0, -1.0] {
+        y.fill(0.0);
+        y[d - 1] = c * cd;
+        if d >= 3 {
+            y[d - 2] = c * cb;
+        }
+        y[i] = sign * s;
+        visit(&y[..d], w)?;
     }
     Ok(())
 }

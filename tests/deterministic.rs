@@ -2,7 +2,7 @@
 //! moments from log F's gradient and Hessian (an independent evaluation: the moments are
 //! recomputed here from `evaluate`, the points only enter through their coordinates).
 
-use bingham::deterministic::{max_count, Reproduced, Scheme};
+use bingham::deterministic::{max_count, DeterministicSamples, Reproduced, Scheme};
 use bingham::normalization::evaluate;
 use bingham::{Bingham, Method};
 
@@ -93,6 +93,13 @@ fn moments_scheme_reproduces_second_and_fourth_moments() {
         &[0.0, 0.0, 0.0, 0.0],
         &[-1e6, -1e5, -1e3, 0.0],
         &[-100.0, -50.0, -10.0, 0.0],
+        // Girdles (two sharp axes and a broad one): the three-center variant.
+        &[-143.46, -143.45, -2.0, 0.0],
+        &[-200.0, -200.0, -2.0, 0.0],
+        &[-1e6, -1e6, -1.0, 0.0],
+        &[-1e4, -400.0, -0.5, 0.0],
+        &[-1e6, -10.0, -1.0, 0.0],
+        &[-6.7e4, -6.3e3, -2.9, 0.0],
     ];
     for (n, z) in cases.iter().enumerate() {
         let d = z.len();
@@ -103,5 +110,109 @@ fn moments_scheme_reproduces_second_and_fourth_moments() {
         assert_eq!(count, 2 * d * d - 4 * d + 3);
         assert!(e2 < 1e-12, "z = {z:?}: second moment error {e2:e}");
         assert!(e4 < 1e-10, "z = {z:?}: fourth moment error {e4:e}");
+    }
+}
+
+/// Where no positive set of either shape exists, the TAC 2016 points with λ = 1/2, and the
+/// scheme says so.
+#[test]
+fn moments_scheme_falls_back_with_second_moment_only() {
+    for (n, z) in [[-25.57, -6.78, -0.0169, 0.0], [-2.79e6, -12.5, -0.145, 0.0]]
+        .iter()
+        .enumerate()
+    {
+        let b = Bingham::from_row_major(4, &orthogonal(4, 90 + n as u64), z).unwrap();
+        let (e2, e4, rep, count) = moment_errors(&b, Scheme::Moments);
+        println!("fallback z = {z:?}: {count} points, second {e2:.1e}, fourth {e4:.1e}");
+        assert_eq!(rep, Reproduced::SecondMoment);
+        assert_eq!(count, 7);
+        assert!(e2 < 1e-12);
+        let tac = b
+            .deterministic_samples(Scheme::Tac2016 { lambda: 0.5 })
+            .unwrap();
+        let ours = b.deterministic_samples(Scheme::Moments).unwrap();
+        assert_eq!(
+            tac,
+            DeterministicSamples {
+                reproduced: Reproduced::SecondMoment,
+                ..ours
+            }
+        );
+    }
+}
+
+/// The TAC 2016 scheme: 2d − 1 points, exact second moment, fourth moments not reproduced;
+/// the mode's weight is λ ω_{d−1}.
+#[test]
+fn tac2016_reproduces_the_second_moment() {
+    for (n, z) in [
+        vec![-3.0, 0.0],
+        vec![-20.0, -5.0, 0.0],
+        vec![-40.0, -25.0, -12.0, 0.0],
+    ]
+    .iter()
+    .enumerate()
+    {
+        let d = z.len();
+        let b = Bingham::from_row_major(d, &orthogonal(d, 60 + n as u64), z).unwrap();
+        for lambda in [0.0, 0.5, 1.0] {
+            let (e2, e4, rep, count) = moment_errors(&b, Scheme::Tac2016 { lambda });
+            assert_eq!(rep, Reproduced::SecondMoment);
+            assert_eq!(count, 2 * d - 1);
+            assert!(e2 < 1e-12, "{e2:e}");
+            assert!(
+                e4 > 1e-3,
+                "TAC 2016 does not reproduce the fourth moments: {e4:e}"
+            );
+            let s = b.deterministic_samples(Scheme::Tac2016 { lambda }).unwrap();
+            let w = b.omega().unwrap();
+            assert!((s.weights[0] - lambda * w[d - 1]).abs() < 1e-15);
+        }
+    }
+    let b = Bingham::from_row_major(2, &orthogonal(2, 1), &[-3.0, 0.0]).unwrap();
+    for lambda in [-0.1, 1.1, f64::NAN] {
+        assert!(b.deterministic_samples(Scheme::Tac2016 { lambda }).is_err());
+    }
+}
+
+/// Over random z (|z_i| log-uniform in [0.1, 1e7]): how often each d needs the fallback, and
+/// every moment-matched set reproduces its moments.
+#[test]
+fn moments_scheme_coverage_over_random_z() {
+    let mut s = 0x5eed_u64;
+    let mut uniform = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for d in [2usize, 3, 4] {
+        let n = 2000;
+        let mut fallback = 0;
+        let mut worst: f64 = 0.0;
+        for k in 0..n {
+            let mut z: Vec<f64> = (0..d)
+                .map(|_| -(10f64).powf(-1.0 + 8.0 * uniform()))
+                .collect();
+            z[d - 1] = 0.0;
+            let b = Bingham::from_row_major(d, &orthogonal(d, 1000 + k as u64), &z).unwrap();
+            let (e2, e4, rep, _) = moment_errors(&b, Scheme::Moments);
+            assert!(e2 < 1e-11, "z = {z:?}: {e2:e}");
+            match rep {
+                Reproduced::FourthMoments => worst = worst.max(e4),
+                Reproduced::SecondMoment => fallback += 1,
+            }
+        }
+        let share = fallback as f64 / n as f64;
+        println!(
+            "d = {d}: fallback for {:.2} % of {n} random z; fourth moments to {worst:.1e}",
+            100.0 * share
+        );
+        assert!(worst < 1e-9);
+        if d < 4 {
+            assert_eq!(fallback, 0);
+        } else {
+            assert!(share < 0.06, "{share}");
+        }
     }
 }
