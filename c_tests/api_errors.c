@@ -11,7 +11,9 @@
  *   error message that names the function and the offending argument;
  * - bingham_last_error_message (length query, truncation, NULL handling, per-thread),
  *   bingham_status_str for every code, bingham_version against the header macros;
- * - special cases: F overflow, degenerate second moments, n = 0, sampling determinism.
+ * - special cases: F overflow, degenerate second moments, n = 0, sampling determinism;
+ * - deterministic samples (count, capacity, scheme, lambda) and the nonlinear filter steps
+ *   (NULL handle / callback / noise, invalid noise before any callback, failing callbacks).
  */
 #define _DEFAULT_SOURCE 1
 #include <pthread.h>
@@ -528,6 +530,281 @@ static void test_counts_and_aliasing(void) {
     for (int i = 0; i < 4; ++i) CHECK(md[i] == mr[i * 4 + 3]);
 }
 
+/* ---- deterministic samples and the nonlinear filter steps ------------------------------------ */
+
+static size_t expected_count(size_t d, int scheme) {
+    return scheme == BINGHAM_SAMPLES_TAC2016 ? 2 * d - 1 : 2 * d * d - 4 * d + 3;
+}
+
+static void test_deterministic_sample_count(void) {
+    size_t n = 12345;
+    for (size_t d = 2; d <= 64; d += (d < 8 ? 1 : 28)) {
+        CHECK_OK(bingham_deterministic_sample_count(d, BINGHAM_SAMPLES_TAC2016, &n));
+        CHECK(n == expected_count(d, BINGHAM_SAMPLES_TAC2016));
+        CHECK_OK(bingham_deterministic_sample_count(d, BINGHAM_SAMPLES_MOMENTS, &n));
+        CHECK(n == expected_count(d, BINGHAM_SAMPLES_MOMENTS));
+    }
+    CHECK(n == 2 * 64 * 64 - 4 * 64 + 3);
+    n = 12345;
+    const size_t bad_dims[] = {0, 1, 65, (size_t)-1};
+    for (size_t k = 0; k < sizeof bad_dims / sizeof bad_dims[0]; ++k) {
+        CHECK_STATUS(bingham_deterministic_sample_count(bad_dims[k], BINGHAM_SAMPLES_MOMENTS, &n),
+                     BINGHAM_ERR_INVALID_DIMENSION);
+        CHECK_MESSAGE("bingham_deterministic_sample_count", "d = ");
+        CHECK_STATUS(bingham_deterministic_sample_count(bad_dims[k], 0, (size_t *)no_access_page),
+                     BINGHAM_ERR_INVALID_DIMENSION);
+    }
+    const int bad_schemes[] = {-1, 2, 1 << 30};
+    for (int k = 0; k < 3; ++k) {
+        CHECK_STATUS(bingham_deterministic_sample_count(3, bad_schemes[k], &n), BINGHAM_ERR_INVALID_ARGUMENT);
+        CHECK_MESSAGE("bingham_deterministic_sample_count", "scheme");
+    }
+    CHECK_STATUS(bingham_deterministic_sample_count(3, 0, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    CHECK_MESSAGE("bingham_deterministic_sample_count", "`count` is NULL");
+    CHECK(n == 12345);
+}
+
+#define DS_CAP 20 /* >= 19, the MOMENTS count for d = 4 */
+
+typedef struct {
+    double points[(DS_CAP + 1) * 4], weights[DS_CAP + 1];
+    size_t count;
+    int reproduced;
+} ds_out_t;
+
+static void ds_sentinel(ds_out_t *o) { memset(o, 0xA5, sizeof *o); }
+
+static int ds_untouched(const ds_out_t *o) {
+    const unsigned char *p = (const unsigned char *)o;
+    for (size_t k = 0; k < sizeof *o; ++k)
+        if (p[k] != 0xA5) return 0;
+    return 1;
+}
+
+static void test_deterministic_samples(void) {
+    const size_t dims[] = {2, 3, 4};
+    const int schemes[] = {BINGHAM_SAMPLES_TAC2016, BINGHAM_SAMPLES_MOMENTS};
+    char needle[96];
+    for (size_t di = 0; di < 3; ++di)
+        for (int si = 0; si < 2; ++si) {
+            size_t d = dims[di];
+            int scheme = schemes[si];
+            size_t need = expected_count(d, scheme);
+            double m[16], z[4];
+            ds_out_t o, ref;
+            fill_orthogonal(d, m, 0.2);
+            fill_input(K_Z, d, 0, z, 0);
+            /* success with exactly the needed capacity: rows beyond *count untouched */
+            ds_sentinel(&o);
+            CHECK_OK(bingham_deterministic_samples(d, m, z, scheme, 0.5, need, o.points, o.weights, &o.count,
+                                                   &o.reproduced));
+            CHECK(o.count <= need && (o.reproduced == 2 || o.reproduced == 4));
+            if (scheme == BINGHAM_SAMPLES_TAC2016) CHECK(o.count == need && o.reproduced == 2);
+            double sum = 0;
+            for (size_t k = 0; k < o.count; ++k) {
+                double s = 0;
+                for (size_t i = 0; i < d; ++i) s += o.points[k * d + i] * o.points[k * d + i];
+                CHECK_CLOSE(s, 1.0, 1e-14);
+                CHECK(o.weights[k] >= 0);
+                sum += o.weights[k];
+            }
+            CHECK_CLOSE(sum, 1.0, 1e-14);
+            {
+                const unsigned char *p = (const unsigned char *)(o.points + o.count * d);
+                int clean = 1;
+                for (size_t k = 0; k < (DS_CAP + 1 - o.count) * d * sizeof(double); ++k) clean &= p[k] == 0xA5;
+                CHECK(clean);
+            }
+            ref = o;
+            /* reproduced may be NULL; a larger capacity is fine; lambda is ignored by MOMENTS */
+            ds_sentinel(&o);
+            CHECK_OK(bingham_deterministic_samples(d, m, z, scheme, scheme == BINGHAM_SAMPLES_MOMENTS ? NAN : 0.5,
+                                                   DS_CAP, o.points, o.weights, &o.count, NULL));
+            CHECK(o.count == ref.count && memcmp(o.points, ref.points, o.count * d * sizeof(double)) == 0 &&
+                  memcmp(o.weights, ref.weights, o.count * sizeof(double)) == 0);
+            /* NULL pointers */
+            const char *names[] = {"m", "z", "points", "weights", "count"};
+            for (int k = 0; k < 5; ++k) {
+                ds_sentinel(&o);
+                bingham_status st = bingham_deterministic_samples(
+                    d, k == 0 ? NULL : m, k == 1 ? NULL : z, scheme, 0.5, need, k == 2 ? NULL : o.points,
+                    k == 3 ? NULL : o.weights, k == 4 ? NULL : &o.count, &o.reproduced);
+                CHECK_STATUS(st, BINGHAM_ERR_NULL_ARGUMENT);
+                CHECK(ds_untouched(&o));
+                snprintf(needle, sizeof needle, "`%s` is NULL", names[k]);
+                CHECK_MESSAGE("bingham_deterministic_samples", needle);
+            }
+            /* capacity one short: the message gives the needed count */
+            ds_sentinel(&o);
+            CHECK_STATUS(bingham_deterministic_samples(d, m, z, scheme, 0.5, need - 1, o.points, o.weights, &o.count,
+                                                       &o.reproduced),
+                         BINGHAM_ERR_INVALID_DIMENSION);
+            CHECK(ds_untouched(&o));
+            snprintf(needle, sizeof needle, "the %zu points", need);
+            CHECK_MESSAGE("bingham_deterministic_samples", needle);
+            /* NaN / Inf in m and z */
+            for (int k = 0; k < 2; ++k) {
+                double *a = k == 0 ? m : z;
+                size_t pos = k == 0 ? d * d - 1 : 0;
+                double saved = a[pos];
+                a[pos] = k == 0 ? NAN : -INFINITY;
+                ds_sentinel(&o);
+                CHECK_STATUS(bingham_deterministic_samples(d, m, z, scheme, 0.5, need, o.points, o.weights, &o.count,
+                                                           &o.reproduced),
+                             BINGHAM_ERR_INVALID_ARGUMENT);
+                CHECK(ds_untouched(&o));
+                snprintf(needle, sizeof needle, "`%s[%zu]` = ", k == 0 ? "m" : "z", pos);
+                CHECK_MESSAGE("bingham_deterministic_samples", needle);
+                a[pos] = saved;
+            }
+            /* m not orthogonal */
+            m[0] += 1e-4;
+            ds_sentinel(&o);
+            CHECK_STATUS(bingham_deterministic_samples(d, m, z, scheme, 0.5, need, o.points, o.weights, &o.count,
+                                                       &o.reproduced),
+                         BINGHAM_ERR_INVALID_ARGUMENT);
+            CHECK(ds_untouched(&o));
+            CHECK_MESSAGE("bingham_deterministic_samples", "orthogonal");
+            m[0] -= 1e-4;
+            /* lambda outside [0, 1] (TAC 2016 only) and unknown schemes */
+            if (scheme == BINGHAM_SAMPLES_TAC2016) {
+                const double bad_lambda[] = {-0.01, 1.01, NAN, INFINITY};
+                for (int k = 0; k < 4; ++k) {
+                    ds_sentinel(&o);
+                    CHECK_STATUS(bingham_deterministic_samples(d, m, z, scheme, bad_lambda[k], need, o.points,
+                                                               o.weights, &o.count, &o.reproduced),
+                                 BINGHAM_ERR_INVALID_ARGUMENT);
+                    CHECK(ds_untouched(&o));
+                    CHECK_MESSAGE("bingham_deterministic_samples", "lambda");
+                }
+                const double ok_lambda[] = {0.0, 1.0};
+                for (int k = 0; k < 2; ++k)
+                    CHECK_OK(bingham_deterministic_samples(d, m, z, scheme, ok_lambda[k], need, o.points, o.weights,
+                                                           &o.count, &o.reproduced));
+            }
+            ds_sentinel(&o);
+            CHECK_STATUS(bingham_deterministic_samples(d, m, z, 2, 0.5, DS_CAP, o.points, o.weights, &o.count,
+                                                       &o.reproduced),
+                         BINGHAM_ERR_INVALID_ARGUMENT);
+            CHECK(ds_untouched(&o));
+            CHECK_MESSAGE("bingham_deterministic_samples", "unknown scheme 2");
+        }
+    /* invalid d: every pointer aims at an inaccessible page */
+    const size_t bad_dims[] = {0, 1, 65, (size_t)-1};
+    for (size_t k = 0; k < sizeof bad_dims / sizeof bad_dims[0]; ++k) {
+        double *p = (double *)no_access_page;
+        CHECK_STATUS(bingham_deterministic_samples(bad_dims[k], p, p, BINGHAM_SAMPLES_MOMENTS, 0.5, 1000, p, p,
+                                                   (size_t *)no_access_page, (int *)no_access_page),
+                     BINGHAM_ERR_INVALID_DIMENSION);
+        CHECK_MESSAGE("bingham_deterministic_samples", "d = ");
+        CHECK_STATUS(bingham_deterministic_samples(bad_dims[k], NULL, NULL, 0, 0.5, 0, NULL, NULL, NULL, NULL),
+                     BINGHAM_ERR_INVALID_DIMENSION);
+    }
+}
+
+/* Callbacks for the nonlinear filter steps; user_data points to a cb_ctx_t. */
+typedef struct {
+    size_t d;
+    int calls;
+    int rc; /* returned by the failing callbacks */
+} cb_ctx_t;
+
+static int identity_transition(const double *x_in, double *x_out, void *user_data) {
+    cb_ctx_t *c = (cb_ctx_t *)user_data;
+    ++c->calls;
+    memcpy(x_out, x_in, c->d * sizeof *x_out);
+    return 0;
+}
+
+static int failing_transition(const double *x_in, double *x_out, void *user_data) {
+    cb_ctx_t *c = (cb_ctx_t *)user_data;
+    (void)x_in;
+    (void)x_out;
+    ++c->calls;
+    return c->rc;
+}
+
+static int constant_log_likelihood(const double *x, double *log_l, void *user_data) {
+    cb_ctx_t *c = (cb_ctx_t *)user_data;
+    (void)x;
+    ++c->calls;
+    *log_l = -2.5;
+    return 0;
+}
+
+static int failing_log_likelihood(const double *x, double *log_l, void *user_data) {
+    cb_ctx_t *c = (cb_ctx_t *)user_data;
+    (void)x;
+    (void)log_l;
+    ++c->calls;
+    return c->rc;
+}
+
+static void test_nonlinear_filter(void) {
+    const size_t dims[] = {2, 4};
+    for (int di = 0; di < 2; ++di) {
+        size_t d = dims[di];
+        double m[16], z[4] = {-5, -1, -3, 0}, mw[16], zw[4] = {-40, -60, -50, 0};
+        double sm[16], sz[4], am[16], az[4];
+        fill_orthogonal(d, m, 0.3);
+        fill_orthogonal(d, mw, 0.7);
+        bingham_filter *f = NULL;
+        CHECK_OK(bingham_filter_new(d, m, z, &f));
+        CHECK_OK(bingham_filter_get_state(f, sm, sz));
+        cb_ctx_t c = {d, 0, 0};
+        /* NULL handle, callback, noise: refused before the callback is called */
+        CHECK_STATUS(bingham_filter_predict_nonlinear(NULL, identity_transition, &c, mw, zw), BINGHAM_ERR_NULL_ARGUMENT);
+        CHECK_MESSAGE("bingham_filter_predict_nonlinear", "`f` is NULL");
+        CHECK_STATUS(bingham_filter_predict_nonlinear(f, NULL, &c, mw, zw), BINGHAM_ERR_NULL_ARGUMENT);
+        CHECK_MESSAGE("bingham_filter_predict_nonlinear", "`fn` is NULL");
+        CHECK_STATUS(bingham_filter_predict_nonlinear(f, identity_transition, &c, NULL, zw), BINGHAM_ERR_NULL_ARGUMENT);
+        CHECK_MESSAGE("bingham_filter_predict_nonlinear", "`m_w` is NULL");
+        CHECK_STATUS(bingham_filter_predict_nonlinear(f, identity_transition, &c, mw, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+        CHECK_MESSAGE("bingham_filter_predict_nonlinear", "`z_w` is NULL");
+        /* invalid noise: refused before the callback is called */
+        zw[1] = NAN;
+        CHECK_STATUS(bingham_filter_predict_nonlinear(f, identity_transition, &c, mw, zw), BINGHAM_ERR_INVALID_ARGUMENT);
+        CHECK_MESSAGE("bingham_filter_predict_nonlinear", "`z_w[1]` = ");
+        zw[1] = -60;
+        mw[0] += 1e-4;
+        CHECK_STATUS(bingham_filter_predict_nonlinear(f, identity_transition, &c, mw, zw), BINGHAM_ERR_INVALID_ARGUMENT);
+        CHECK_MESSAGE("bingham_filter_predict_nonlinear", "orthogonal");
+        mw[0] -= 1e-4;
+        CHECK(c.calls == 0);
+        CHECK_STATUS(bingham_filter_update_nonlinear(NULL, constant_log_likelihood, &c), BINGHAM_ERR_NULL_ARGUMENT);
+        CHECK_MESSAGE("bingham_filter_update_nonlinear", "`f` is NULL");
+        CHECK_STATUS(bingham_filter_update_nonlinear(f, NULL, &c), BINGHAM_ERR_NULL_ARGUMENT);
+        CHECK_MESSAGE("bingham_filter_update_nonlinear", "`fn` is NULL");
+        CHECK(c.calls == 0);
+        /* failing callbacks: the return code is reported, the state unchanged */
+        const int codes[] = {1, -1, 42};
+        for (int k = 0; k < 3; ++k) {
+            char needle[64];
+            c.calls = 0;
+            c.rc = codes[k];
+            snprintf(needle, sizeof needle, "callback returned %d", codes[k]);
+            CHECK_STATUS(bingham_filter_predict_nonlinear(f, failing_transition, &c, mw, zw), BINGHAM_ERR_CALLBACK);
+            CHECK_MESSAGE("bingham_filter_predict_nonlinear", needle);
+            CHECK_STATUS(bingham_filter_update_nonlinear(f, failing_log_likelihood, &c), BINGHAM_ERR_CALLBACK);
+            CHECK_MESSAGE("bingham_filter_update_nonlinear", needle);
+            CHECK(c.calls == 2); /* the first failing call ends the step */
+        }
+        CHECK_OK(bingham_filter_get_state(f, am, az));
+        CHECK(memcmp(am, sm, d * d * sizeof(double)) == 0 && memcmp(az, sz, d * sizeof(double)) == 0);
+        /* success: one call per deterministic sample; a constant likelihood changes nothing */
+        c.calls = 0;
+        CHECK_OK(bingham_filter_predict_nonlinear(f, identity_transition, &c, mw, zw));
+        CHECK(c.calls == (int)expected_count(d, BINGHAM_SAMPLES_MOMENTS));
+        CHECK_OK(bingham_filter_get_state(f, sm, sz));
+        c.calls = 0;
+        CHECK_OK(bingham_filter_update_nonlinear(f, constant_log_likelihood, &c));
+        CHECK(c.calls > 0 && c.calls % (int)expected_count(d, BINGHAM_SAMPLES_MOMENTS) == 0);
+        CHECK_OK(bingham_filter_get_state(f, am, az));
+        for (size_t i = 0; i < d; ++i) CHECK_CLOSE(az[i], sz[i], 1e-9);
+        bingham_filter_free(f);
+    }
+}
+
 /* ---- last error message, status strings, version -------------------------------------- */
 
 static void test_last_error_message(void) {
@@ -595,12 +872,13 @@ static void test_status_strings_and_version(void) {
     CHECK(strcmp(bingham_status_str(BINGHAM_ERR_NOT_CONVERGED), "not converged") == 0);
     CHECK(strcmp(bingham_status_str(BINGHAM_ERR_NUMERICAL), "numerical failure") == 0);
     CHECK(strcmp(bingham_status_str(BINGHAM_ERR_PANIC), "internal error (panic)") == 0);
-    CHECK(strcmp(bingham_status_str(7), "unknown status") == 0);
+    CHECK(strcmp(bingham_status_str(BINGHAM_ERR_CALLBACK), "callback failed") == 0);
+    CHECK(strcmp(bingham_status_str(8), "unknown status") == 0);
     CHECK(strcmp(bingham_status_str(-1), "unknown status") == 0);
     CHECK(strcmp(bingham_status_str(1 << 30), "unknown status") == 0);
     CHECK(BINGHAM_OK == 0 && BINGHAM_ERR_NULL_ARGUMENT == 1 && BINGHAM_ERR_INVALID_DIMENSION == 2 &&
           BINGHAM_ERR_INVALID_ARGUMENT == 3 && BINGHAM_ERR_NOT_CONVERGED == 4 &&
-          BINGHAM_ERR_NUMERICAL == 5 && BINGHAM_ERR_PANIC == 6);
+          BINGHAM_ERR_NUMERICAL == 5 && BINGHAM_ERR_PANIC == 6 && BINGHAM_ERR_CALLBACK == 7);
     char expect[64];
     snprintf(expect, sizeof expect, "%d.%d.%d", (int)BINGHAM_VERSION_MAJOR, (int)BINGHAM_VERSION_MINOR,
              (int)BINGHAM_VERSION_PATCH);
@@ -628,6 +906,9 @@ int main(void) {
     test_normalization_special();
     test_mle_special();
     test_counts_and_aliasing();
+    test_deterministic_sample_count();
+    test_deterministic_samples();
+    test_nonlinear_filter();
     test_last_error_message();
     test_threads();
     test_status_strings_and_version();

@@ -81,6 +81,26 @@
 #define BINGHAM_UNIT_TOL 1e-6
 
 /**
+ * Scheme of `bingham_deterministic_samples()`: the TAC 2016 points (Gilitschenski, Kurz,
+ * Julier & Hanebeck, "Unscented Orientation Estimation Based on the Bingham Distribution",
+ * IEEE TAC 2016; libDirectional's `sampleDeterministic`) with the weighting parameter
+ * `lambda` in [0, 1] (libDirectional's default 0.5): `2d - 1` points that reproduce the
+ * second moment exactly, not the fourth moments.
+ */
+#define BINGHAM_SAMPLES_TAC2016 0
+
+/**
+ * Scheme of `bingham_deterministic_samples()`: the moment-matched points, `2d² - 4d + 3` of
+ * them (3, 9, 19 for d = 2, 3, 4) reproducing every second and fourth moment exactly (for a
+ * concentrated distribution they tend to the degree-5 Gaussian cubature). Where no positive
+ * point set of that kind exists (for d ≥ 4 some distributions with a very broad axis next to
+ * a moderately sharp one, about 5 % of random z for d = 4; and |z| beyond about 1e150) it
+ * returns the `2d - 1` TAC 2016 points with `lambda` = 0.5 instead, which reproduce the
+ * second moment only, and says so (`*reproduced` = 2). `lambda` is ignored.
+ */
+#define BINGHAM_SAMPLES_MOMENTS 1
+
+/**
  * Concentrations of the state and of the process noise below `-BINGHAM_FILTER_MAX_CONCENTRATION`
  * are raised to it before a prediction (see `bingham_filter_predict()`); an angular spread of
  * about 7 microradians.
@@ -203,6 +223,52 @@ typedef struct bingham_ahrs bingham_ahrs;
  * exact bit patterns), so passing the same noise arrays every step costs nothing extra.
  */
 typedef struct bingham_filter bingham_filter;
+
+/**
+ * The transition function `a` of `bingham_filter_predict_nonlinear()` (system model
+ * `x[k+1] = a(x[k]) (+) w[k]`).
+ *
+ * Called with `x_in`: a unit vector of d doubles (the filter's dimension; a quaternion, scalar
+ * first, for d = 4), owned by the library and valid during the call only. It must write the
+ * unit vector `a(x_in)` to `x_out` (d doubles; unit within `BINGHAM_UNIT_TOL`, it is then
+ * normalized; its sign does not matter) and return 0. `x_out` is filled with NaN before each
+ * call, so an output left unwritten is caught. `user_data` is the pointer passed to
+ * `bingham_filter_predict_nonlinear()`, unchanged.
+ *
+ * A non-zero return means failure: the prediction stops and returns `BINGHAM_ERR_CALLBACK`
+ * with the filter unchanged; so does an output that is not finite or not unit length. The
+ * message of `bingham_last_error_message()` names the point and the returned code or value.
+ *
+ * Contract (the caller's, not checked): `a(-x) = ±a(x)` (an axis / rotation and its negative
+ * are the same, so `a` must respect the sign symmetry). The function is called on the calling
+ * thread, synchronously, a fixed number of times per prediction (see
+ * `bingham_filter_predict_nonlinear()`). It must return normally: it must not unwind (a C++
+ * exception, a Rust panic) or `longjmp` through the library, which is undefined behaviour
+ * (catch exceptions inside and return non-zero instead), and it must not call functions on
+ * the same filter handle (other library functions, e.g. on other handles, are fine).
+ */
+typedef int (*bingham_transition_fn)(const double *x_in, double *x_out, void *user_data);
+
+/**
+ * The log-likelihood function of `bingham_filter_update_nonlinear()`: the natural logarithm
+ * of the likelihood `L(x) = p(measurement | x)` up to an additive constant (a log-likelihood,
+ * so sharp likelihoods do not underflow).
+ *
+ * Called with `x`: a unit vector of d doubles (a quaternion, scalar first, for d = 4), owned by
+ * the library and valid during the call only. It must write `log L(x)` (finite) to `*log_l`
+ * and return 0. `*log_l` holds NaN before each call, so a value left unwritten is caught.
+ * `user_data` is the pointer passed to `bingham_filter_update_nonlinear()`, unchanged.
+ *
+ * A non-zero return means failure: the update stops and returns `BINGHAM_ERR_CALLBACK` with
+ * the filter unchanged; so does a value that is not finite (a likelihood of exactly 0 has no
+ * finite logarithm: return a large negative number instead).
+ *
+ * Contract (the caller's, not checked): `L(-x) = L(x)`. Called on the calling thread,
+ * synchronously (how often: see `bingham_filter_update_nonlinear()`); it must return normally
+ * (no unwinding or `longjmp` through the library) and must not call functions on the same
+ * filter handle.
+ */
+typedef int (*bingham_log_likelihood_fn)(const double *x, double *log_l, void *user_data);
 
 /**
  * Parameters of the AHRS (`bingham_ahrs_params` in C, `AhrsParams` in Rust). The defaults —
@@ -793,6 +859,78 @@ enum bingham_status bingham_angular_spread(size_t d,
                                            double *spread);
 
 /**
+ * The largest number of points `bingham_deterministic_samples()` returns for `d` and `scheme`:
+ * the capacity its `points` (capacity x d doubles) and `weights` (capacity doubles) must have.
+ *
+ * - `d`: 2..64.
+ * - `scheme`: `BINGHAM_SAMPLES_TAC2016` (`2d - 1` points) or `BINGHAM_SAMPLES_MOMENTS`
+ *   (`2d² - 4d + 3` points: 3, 9, 19 for d = 2, 3, 4; 7939 for d = 64).
+ * - `count`: receives the number.
+ *
+ * Errors: `BINGHAM_ERR_INVALID_DIMENSION` (d), `BINGHAM_ERR_INVALID_ARGUMENT` (unknown
+ * `scheme`), `BINGHAM_ERR_NULL_ARGUMENT` (`count`). On error `*count` is not written.
+ *
+ * # Safety
+ * `count`: one writable `size_t`.
+ */
+enum bingham_status bingham_deterministic_sample_count(size_t d, int scheme, size_t *count);
+
+/**
+ * Deterministic samples of Bingham(M, z): weighted unit vectors whose weighted moments are
+ * those of the distribution, for propagating it through a nonlinear function `a` (the
+ * "unscented" idea on the sphere): `E[g(a(x))] ≈ Σ_k weights[k] g(a(points[k]))`.
+ *
+ * The points are built in the principal coordinates `y = Mᵀ x` and mapped back by `x = M y`:
+ * the mode first, then points around it along the other principal directions (pairs
+ * `(mode ± t_i m_i)/‖·‖`) and, for `BINGHAM_SAMPLES_MOMENTS`, along pairs of them (quadruples
+ * `(mode ± t_i m_i ± t_j m_j)/‖·‖`; for some flat distributions in d ≥ 4 the broadest
+ * non-mode direction gets two further centers instead). Every point lies in the mode's
+ * hemisphere (`−x` is the same point of a Bingham distribution).
+ *
+ * - `d`: 2..64. Checked before any array is read.
+ * - `m`: d x d row-major orthogonal (max |MᵀM − I| ≤ `BINGHAM_ORTHOGONALITY_TOL`), columns
+ *   are the principal directions; `z`: d concentrations, `z[i]` belongs to column i, any order
+ *   and shift.
+ * - `scheme`: `BINGHAM_SAMPLES_TAC2016` (exact second moment, `2d - 1` points) or
+ *   `BINGHAM_SAMPLES_MOMENTS` (exact second and fourth moments, `2d² - 4d + 3` points, or the
+ *   TAC 2016 points where that set does not exist); see the constants.
+ * - `lambda`: the TAC 2016 weighting parameter, in [0, 1] (0.5 is libDirectional's
+ *   default; 1 puts the least weight on the mode). Ignored by `BINGHAM_SAMPLES_MOMENTS`.
+ * - `capacity`: the number of points `points` and `weights` can hold; must be at least
+ *   `bingham_deterministic_sample_count(d, scheme)` (the largest count the scheme may return,
+ *   even where it returns fewer).
+ * - `points`: receives `*count` unit vectors, row-major `*count x d` (one point per row); the
+ *   rows beyond `*count` are not written.
+ * - `weights`: receives `*count` weights, each ≥ 0, summing to 1.
+ * - `count`: receives the number of points written.
+ * - `reproduced`: `NULL`, or receives what the weighted points reproduce exactly (to
+ *   rounding): 2 = the second moment `E[x xᵀ] = M diag(ω) Mᵀ` (ω_i = ∂ log F/∂z_i); 4 = the
+ *   second and every fourth moment `E[x_i x_j x_k x_l]`.
+ *
+ * Deterministic: the same inputs give the same points, bit for bit.
+ *
+ * Errors: `BINGHAM_ERR_INVALID_DIMENSION` (d; `capacity` smaller than the needed count, the
+ * message says the count), `BINGHAM_ERR_INVALID_ARGUMENT` (unknown `scheme`, `lambda` not in
+ * [0, 1] for TAC 2016, NaN/Inf, `m` not orthogonal), `BINGHAM_ERR_NULL_ARGUMENT` (`m`, `z`,
+ * `points`, `weights`, `count`), `BINGHAM_ERR_NUMERICAL` (the moments of F cannot be
+ * evaluated). On error nothing is written.
+ *
+ * # Safety
+ * `m`: d*d and `z`: d readable doubles; `points`: capacity*d and `weights`: capacity writable
+ * doubles; `count`: a writable `size_t`; `reproduced`: `NULL` or a writable `int`.
+ */
+enum bingham_status bingham_deterministic_samples(size_t d,
+                                                  const double *m,
+                                                  const double *z,
+                                                  int scheme,
+                                                  double lambda,
+                                                  size_t capacity,
+                                                  double *points,
+                                                  double *weights,
+                                                  size_t *count,
+                                                  int *reproduced);
+
+/**
  * Creates a filter with the initial estimate `Bingham(m0, z0)`.
  *
  * - `d`: 2 (axes: complex numbers `(re, im)`) or 4 (unit quaternions, scalar first
@@ -1028,6 +1166,82 @@ enum bingham_status bingham_filter_log_likelihood_vector(const struct bingham_fi
                                                          const double *reference,
                                                          double kappa,
                                                          double *out);
+
+/**
+ * Nonlinear prediction step: the state becomes the distribution of `a(x) (+) w`,
+ * `w ~ Bingham(m_w, z_w)`, for a transition function `a` given as a C callback.
+ *
+ * The state's deterministic samples (the `BINGHAM_SAMPLES_MOMENTS` points of
+ * `bingham_deterministic_samples()`, which reproduce its second and fourth moments) are passed
+ * through `fn`; the weighted second moment of the results is composed exactly with the
+ * noise's second moment and the Bingham distribution with that second moment is fitted
+ * (moment matching), as in `bingham_filter_predict()`. With `a` the identity this equals
+ * `bingham_filter_predict()` to rounding.
+ *
+ * - `fn`: the transition function (see `bingham_transition_fn` for its contract), called once
+ *   per sample, in the order of `bingham_deterministic_samples()`: 3 times for d = 2, 19 times
+ *   for d = 4 (7 where the moment-matched set does not exist and the TAC 2016 points are used);
+ *   the first failing call ends the prediction.
+ * - `user_data`: passed to every call of `fn` unchanged; may be `NULL`.
+ * - `m_w`, `z_w`: the process noise, as in `bingham_filter_predict()` (cached likewise).
+ *
+ * Concentrations below `-BINGHAM_FILTER_MAX_CONCENTRATION` (state or noise) are raised to it
+ * for this computation, as in `bingham_filter_predict()`. No heap allocation once the noise is
+ * cached (beyond what `fn` does).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `fn`, `m_w`, `z_w`), `BINGHAM_ERR_INVALID_ARGUMENT`
+ * (NaN/Inf, `m_w` not orthogonal), `BINGHAM_ERR_CALLBACK` (`fn` returned non-zero, or an output
+ * that is not finite or not unit), `BINGHAM_ERR_NOT_CONVERGED` / `BINGHAM_ERR_NUMERICAL`
+ * (moment matching). The arguments are checked before `fn` is first called. On error the
+ * filter is unchanged.
+ *
+ * # Safety
+ * `f`: a live handle; `fn`: a function honouring the contract of `bingham_transition_fn`;
+ * `m_w`: d*d and `z_w`: d readable doubles.
+ */
+enum bingham_status bingham_filter_predict_nonlinear(struct bingham_filter *f,
+                                                     bingham_transition_fn fn,
+                                                     void *user_data,
+                                                     const double *m_w,
+                                                     const double *z_w);
+
+/**
+ * Nonlinear measurement update (Bayes' rule): the state becomes the Bingham approximation of
+ * the posterior `∝ prior(x) · L(x)`, for a likelihood `L` given by its logarithm as a C callback
+ * (e.g. a sensor that sees a nonlinear function of the orientation).
+ *
+ * The likelihood is absorbed iteratively: each round evaluates `fn` at the deterministic
+ * samples of the current approximation (the `BINGHAM_SAMPLES_MOMENTS` points of
+ * `bingham_deterministic_samples()`, plus fit-only points where those are too few to determine
+ * a quadratic form: 5 calls per round for d = 2, 19 for d = 4), fits a Bingham exponent to the
+ * values and multiplies it in, a fraction at a time where `log L` is far from a quadratic form
+ * over the samples (progressive tempering, so that the points do not collapse onto one); two
+ * final importance-weighted moment matches correct the result. Calls per update: 57 for a
+ * Bingham likelihood with d = 4, 57–190 for the camera likelihoods of `tests/nonlinear.rs`. A
+ * likelihood that is itself a Bingham density (`log L` a quadratic form in x) is absorbed
+ * exactly. The number of calls depends on the likelihood: a few rounds over the samples for
+ * one about as broad as the state, more for a sharper one; the rounds are bounded (a
+ * likelihood not absorbed within the limit gives `BINGHAM_ERR_NOT_CONVERGED`).
+ *
+ * Reliable where the posterior is close to a Bingham distribution (unimodal up to the sign);
+ * a likelihood with several separated modes gets a single-mode fit. For a likelihood that is
+ * a Bingham density with known parameters, `bingham_filter_update()` / `bingham_multiply()`
+ * compute the same product directly.
+ *
+ * - `fn`: the log-likelihood (see `bingham_log_likelihood_fn` for its contract).
+ * - `user_data`: passed to every call of `fn` unchanged; may be `NULL`.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `fn`; checked before `fn` is first called),
+ * `BINGHAM_ERR_CALLBACK` (`fn` returned non-zero or a value that is not finite; the first such
+ * call ends the update), `BINGHAM_ERR_NOT_CONVERGED` (not absorbed within the limit, or a fit
+ * did not converge), `BINGHAM_ERR_NUMERICAL`. On error the filter is unchanged.
+ *
+ * # Safety
+ * `f`: a live handle; `fn`: a function honouring the contract of `bingham_log_likelihood_fn`.
+ */
+enum bingham_status bingham_filter_update_nonlinear(struct bingham_filter *f,
+                                                    bingham_log_likelihood_fn fn,
+                                                    void *user_data);
 
 /**
  * The angular spread (radians) of the filter's state, as `bingham_angular_spread()`:

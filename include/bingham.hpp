@@ -36,6 +36,7 @@
 #include <complex>
 #include <cstddef>
 #include <cstdint>
+#include <exception>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -93,6 +94,42 @@ inline void require(bool ok, bingham_status st, const char *where, const char *w
 }
 inline void require_dim(bool ok, const char *where, const char *what) {
     require(ok, BINGHAM_ERR_INVALID_DIMENSION, where, what);
+}
+// C callbacks (bingham_transition_fn, bingham_log_likelihood_fn) calling a C++ callable: an
+// exception never crosses the C library; it is stored, the callback returns 1 (the library
+// stops and leaves the filter unchanged), and the wrapper rethrows it after the call.
+template <class F>
+struct Callback {
+    F *fn;
+    std::exception_ptr error;
+};
+template <class F>
+int transition_trampoline(const double *x_in, double *x_out, void *user_data) noexcept {
+    auto *c = static_cast<Callback<F> *>(user_data);
+    try {
+        (*c->fn)(x_in, x_out);
+        return 0;
+    } catch (...) {
+        c->error = std::current_exception();
+        return 1;
+    }
+}
+template <class F>
+int log_likelihood_trampoline(const double *x, double *log_l, void *user_data) noexcept {
+    auto *c = static_cast<Callback<F> *>(user_data);
+    try {
+        *log_l = static_cast<double>((*c->fn)(x));
+        return 0;
+    } catch (...) {
+        c->error = std::current_exception();
+        return 1;
+    }
+}
+// Rethrows the callable's exception if there was one, else checks the status.
+template <class F>
+void check_callback(bingham_status st, const Callback<F> &c) {
+    if (c.error) std::rethrow_exception(c.error);
+    check(st);
 }
 }  // namespace detail
 
@@ -575,6 +612,37 @@ public:
         check_noise(noise, "bingham::Filter::predict");
         detail::check(bingham_filter_predict(f_, noise.M.data(), noise.z.data()));
     }
+    /// Nonlinear prediction: x <- a(x) (+) w, w ~ noise (bingham_filter_predict_nonlinear).
+    /// `a` is any callable `void(const double *x_in, double *x_out)`: x_in is a unit vector of
+    /// d() entries, x_out receives the unit vector a(x_in) (d() entries; a(-x) = +-a(x) is the
+    /// caller's contract). Called once per deterministic sample of the state (3 times for d = 2,
+    /// 19 or 7 for d = 4), on this thread. An exception thrown by `a` stops the prediction and
+    /// is rethrown here; a non-finite or non-unit output throws Error(BINGHAM_ERR_CALLBACK). In
+    /// both cases the filter is unchanged.
+    template <class F>
+    void predict_nonlinear(F &&a, const Distribution &noise) {
+        check_noise(noise, "bingham::Filter::predict_nonlinear");
+        using Fn = std::remove_reference_t<F>;
+        detail::Callback<Fn> c{&a, nullptr};
+        bingham_status st = bingham_filter_predict_nonlinear(f_, &detail::transition_trampoline<Fn>, &c,
+                                                             noise.M.data(), noise.z.data());
+        detail::check_callback(st, c);
+    }
+    /// Nonlinear update: posterior prop. to prior(x) L(x) (bingham_filter_update_nonlinear).
+    /// `log_l` is any callable `double(const double *x)` returning log L(x) (finite) for a unit
+    /// vector x of d() entries (L(-x) = L(x) is the caller's contract); called at the samples
+    /// of several iterations (see bingham_filter_update_nonlinear). An exception thrown by
+    /// `log_l` stops the update and is rethrown here; a non-finite value throws
+    /// Error(BINGHAM_ERR_CALLBACK). In both cases the filter is unchanged.
+    template <class F>
+    void update_nonlinear(F &&log_l) {
+        require("bingham::Filter::update_nonlinear");
+        using Fn = std::remove_reference_t<F>;
+        detail::Callback<Fn> c{&log_l, nullptr};
+        bingham_status st = bingham_filter_update_nonlinear(f_, &detail::log_likelihood_trampoline<Fn>, &c);
+        detail::check_callback(st, c);
+    }
+
     /// Prediction with a body-frame rotation increment (d = 4), e.g. from a gyroscope.
     void predict_rotation(const Quaternion &u, const Distribution &noise) { predict_rotation_raw(vec(u), noise); }
     /// Prediction turning an axis (d = 2) by the unit complex number u.

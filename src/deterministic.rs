@@ -500,6 +500,58 @@ fn pair(
     Ok(())
 }
 
+/// Extra points for fitting a quadratic form `xᵀ P x` where `plan` has no more points than `P`
+/// has free entries: for d = 2 the pair at twice the offset; for the `2d − 1` fallback (d ≥ 4)
+/// the quadruples
+/// `(e_{d−1} ± t_i e_i ± t_j e_j)/‖·‖` with the plan's offsets, mapped by `M`, each with a
+/// quarter of the smallest pair weight. They carry no moment: callers use them for the fit
+/// only. Nothing is visited when the plan has its own quadruples.
+pub(crate) fn for_each_probe<D: Dim, const N: usize>(
+    m: &Square<D>,
+    plan: &Plan<N>,
+    mut visit: impl FnMut(&Vector<D>, f64) -> Result<()>,
+) -> Result<()>
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D>,
+{
+    let d = plan.d;
+    let (dd, _) = m.shape_generic();
+    if d == 2 {
+        // Three points determine a 2×2 quadratic form exactly: two more, at twice the offset,
+        // make the fit's residual meaningful.
+        let t = 2.0 * plan.t2[0].min(1e300).sqrt();
+        for sign in [1.0, -1.0] {
+            let mut x = Vector::<D>::zeros_generic(dd, U1);
+            x.axpy(1.0, &m.column(1), 1.0);
+            x.axpy(sign * t, &m.column(0), 1.0);
+            let n = x.norm();
+            x /= n;
+            visit(&x, 0.5 * plan.w1[0])?;
+        }
+        return Ok(());
+    }
+    if plan.quads || d < 4 {
+        return Ok(());
+    }
+    let md = d - 1;
+    let wt = 0.25 * plan.w1[..md].iter().fold(f64::INFINITY, |a, &b| a.min(b));
+    for i in 0..md {
+        for j in i + 1..md {
+            let (ti, tj) = (plan.t2[i].min(1e300).sqrt(), plan.t2[j].min(1e300).sqrt());
+            for (si, sj) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+                let mut x = Vector::<D>::zeros_generic(dd, U1);
+                x.axpy(1.0, &m.column(md), 1.0);
+                x.axpy(si * ti, &m.column(i), 1.0);
+                x.axpy(sj * tj, &m.column(j), 1.0);
+                let n = x.norm();
+                x /= n;
+                visit(&x, wt)?;
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Calls `visit(x, weight)` for every point `x = M y` of `plan` (see [`for_each_principal`]).
 pub(crate) fn for_each_point<D: Dim, const N: usize>(
     m: &Square<D>,

@@ -45,7 +45,7 @@
 use nalgebra::{Const, Matrix4, SMatrix, SVector};
 use std::sync::OnceLock;
 
-use crate::deterministic::{for_each_point, plan, Scheme};
+use crate::deterministic::{for_each_point, for_each_probe, plan, Scheme};
 use crate::distribution::{bayes_product, log_f_omega, product_eigen_precision, Bingham};
 use crate::error::{Error, Result};
 use crate::matrix::{congruence, write_row_major};
@@ -64,23 +64,33 @@ type Vect<const D: usize> = SVector<f64, D>;
 /// `z = −1e10` corresponds to an angular standard deviation of about `1/√(2·1e10) ≈ 7 µrad`.
 pub const MAX_CONCENTRATION: f64 = 1e10;
 
-/// The largest spread (max − min over the current deterministic samples) of the exponent one
-/// tempering step of [`BinghamFilter::update_nonlinear`] applies.
-pub const TEMPERING_SPREAD: f64 = 2.0;
+/// The largest part of `log L` not captured by the fitted exponent (its largest residual over
+/// the current deterministic samples) one tempering step of
+/// [`BinghamFilter::update_nonlinear`] applies: a step applies `L^{Δβ}` with
+/// `Δβ · residual ≤ TEMPERING_RESIDUAL`.
+pub const TEMPERING_RESIDUAL: f64 = 1.0;
 
 /// Importance-corrected moment matches at the end of [`BinghamFilter::update_nonlinear`].
 pub const CORRECTION_PASSES: usize = 2;
+
+/// The importance correction of [`BinghamFilter::update_nonlinear`] is skipped when its
+/// weights' effective share `(Σ w r)² / (Σ w · Σ w r²)` falls below this (the approximation is
+/// then too far from the posterior for the samples to correct it).
+pub const MIN_CORRECTION_SHARE: f64 = 0.5;
 
 /// The most tempering steps [`BinghamFilter::update_nonlinear`] takes.
 pub const MAX_TEMPERING_STEPS: usize = 200;
 
 /// The most deterministic samples a filter step uses (the Moments scheme for d = 4).
-const MAX_SAMPLES: usize = 19;
+const MAX_SAMPLES: usize = 19; // also 7 + 12 probes (d = 4 fallback), 3 + 2 (d = 2)
 
 /// Deterministic samples with their weights and log-likelihoods (on the stack).
 struct Samples<const D: usize> {
     x: [Vect<D>; MAX_SAMPLES],
+    /// Moment weights (fit weights for probes).
     w: [f64; MAX_SAMPLES],
+    /// Fit-only points (no moment weight).
+    probe: [bool; MAX_SAMPLES],
     l: [f64; MAX_SAMPLES],
     n: usize,
 }
@@ -93,6 +103,7 @@ impl<const D: usize> Samples<D> {
         Samples {
             x: [Vect::<D>::zeros(); MAX_SAMPLES],
             w: [0.0; MAX_SAMPLES],
+            probe: [false; MAX_SAMPLES],
             l: [0.0; MAX_SAMPLES],
             n: 0,
         }
@@ -102,11 +113,15 @@ impl<const D: usize> Samples<D> {
     /// the weighted mean offset (the fit's constant).
     #[allow(clippy::needless_range_loop)] // parallel arrays
     fn misfit(&self, p: &Mat<D>) -> f64 {
+        // Relative to the largest log-likelihood, as in the fit (a huge constant cancels).
+        let hi = self.l[..self.n]
+            .iter()
+            .fold(f64::NEG_INFINITY, |a, &b| a.max(b));
         let mut r = [0.0; MAX_SAMPLES];
         let (mut sw, mut c) = (0.0, 0.0);
         for k in 0..self.n {
             let x = &self.x[k];
-            r[k] = self.l[k] - (x.transpose() * p * x)[(0, 0)];
+            r[k] = (self.l[k] - hi) - (x.transpose() * p * x)[(0, 0)];
             c += self.w[k] * r[k];
             sw += self.w[k];
         }
@@ -119,25 +134,38 @@ impl<const D: usize> Samples<D> {
     /// The symmetric `P` minimizing `Σ_k w_k (l_k − c − x_kᵀ P x_k)²` (the constant `c` is
     /// absorbed in `P`'s trace, since `xᵀ x = 1`): the weighted least-squares fit of a Bingham
     /// exponent to the log-likelihood at the samples. Exact when `log L` is such an exponent.
+    ///
+    /// The fit is done in the scaled principal coordinates `u_i = (mᵀx)_i / s_i` of the
+    /// distribution the samples come from (`s_i` the largest `|(mᵀx)_i|` over the samples), so
+    /// the normal equations stay well conditioned however concentrated the samples are.
     #[allow(clippy::needless_range_loop)] // small dense normal equations
-    fn fit_exponent(&self) -> Mat<D> {
+    fn fit_exponent(&self, m: &Mat<D>) -> Mat<D> {
         let nu = D * (D + 1) / 2;
         let hi = self.l[..self.n]
             .iter()
             .fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+        let mut scale = [0.0f64; D];
+        for k in 0..self.n {
+            let y = m.transpose() * self.x[k];
+            for i in 0..D {
+                scale[i] = scale[i].max(y[i].abs());
+            }
+        }
+        for v in scale.iter_mut() {
+            if v.is_nan() || *v <= 0.0 {
+                *v = 1.0;
+            }
+        }
         let mut a = [0.0; MAX_UNKNOWNS * MAX_UNKNOWNS];
         let mut b = [0.0; MAX_UNKNOWNS];
         let mut phi = [0.0; MAX_UNKNOWNS];
         for k in 0..self.n {
-            let x = &self.x[k];
+            let y = m.transpose() * self.x[k];
             let mut u = 0;
             for i in 0..D {
                 for j in i..D {
-                    phi[u] = if i == j {
-                        x[i] * x[i]
-                    } else {
-                        2.0 * x[i] * x[j]
-                    };
+                    let (ui, uj) = (y[i] / scale[i], y[j] / scale[j]);
+                    phi[u] = if i == j { ui * ui } else { 2.0 * ui * uj };
                     u += 1;
                 }
             }
@@ -149,23 +177,23 @@ impl<const D: usize> Samples<D> {
                 }
             }
         }
-        // A tiny ridge keeps the normal equations definite when there are fewer samples than
-        // unknowns (the 2d − 1 fallback points).
+        // A tiny ridge keeps the normal equations definite.
         let tr: f64 = (0..nu).map(|r| a[r * nu + r]).sum();
         for r in 0..nu {
             a[r * nu + r] += 1e-12 * tr / nu as f64;
         }
         cholesky_solve(&mut a[..nu * nu], &mut b[..nu], nu);
-        let mut p = Mat::<D>::zeros();
+        let mut py = Mat::<D>::zeros();
         let mut u = 0;
         for i in 0..D {
             for j in i..D {
-                p[(i, j)] = b[u];
-                p[(j, i)] = b[u];
+                let v = b[u] / (scale[i] * scale[j]);
+                py[(i, j)] = v;
+                py[(j, i)] = v;
                 u += 1;
             }
         }
-        p
+        m * py * m.transpose()
     }
 }
 
@@ -406,31 +434,36 @@ impl BinghamFilter {
     /// underflow.
     ///
     /// The algorithm (each round calls `log_l` at the deterministic samples of the current
-    /// approximation, [`Scheme::Moments`](crate::deterministic::Scheme::Moments): 3 points for
-    /// d = 2, 19 for d = 4):
+    /// approximation, [`Scheme::Moments`](crate::deterministic::Scheme::Moments), plus a few
+    /// fit-only points where those are too few to determine a quadratic form: 5 calls per round
+    /// for d = 2, 19 for d = 4):
     ///
     /// 1. **Progressive (tempered) linearization.** Fit a Bingham exponent `xᵀ P x` to `log L`
-    ///    at the samples (weighted least squares) and multiply the current approximation by
-    ///    `exp(Δβ xᵀ P x)` (an exact Bayes product), with `Δβ` chosen so that the applied
-    ///    exponent varies by at most [`TEMPERING_SPREAD`] over the samples; repeat with the new
-    ///    approximation's samples until `Σ Δβ = 1`. A likelihood much sharper than the prior is
-    ///    thus approached in several steps (about 20 for a tenth of the prior's spread) and
-    ///    never collapses onto one sample; where the exponent fits `log L` exactly (a Bingham
-    ///    likelihood) the whole likelihood is applied in one step, and the result is the exact
-    ///    product.
+    ///    at the samples (weighted least squares, in the approximation's scaled principal
+    ///    coordinates) and multiply the current approximation by `exp(Δβ xᵀ P x)` (an exact
+    ///    Bayes product), with `Δβ` chosen so that the part of `log L` the exponent does not
+    ///    capture (the fit's largest residual over the samples) contributes at most
+    ///    [`TEMPERING_RESIDUAL`] per step; repeat with the new approximation's samples until
+    ///    `Σ Δβ = 1`. Where `log L` is a Bingham exponent the residual vanishes and the whole
+    ///    likelihood is applied at once: the exact product. A likelihood far from log-quadratic
+    ///    over the prior's spread is approached in several steps, each fitted where the
+    ///    approximation now is, and never collapses onto one sample.
     /// 2. **Importance correction** ([`CORRECTION_PASSES`] rounds): reweight the samples of the
     ///    approximation by `prior · L / approximation` and fit the Bingham distribution to their
     ///    second moment (moment matching; the weights are constant when the approximation is the
-    ///    posterior, so an exact result stays exact).
+    ///    posterior, so an exact result stays exact). Skipped where the weights would collapse
+    ///    (effective share below [`MIN_CORRECTION_SHARE`]) or the approximation is sharper than
+    ///    the moments can represent (`|z| > MAX_CONCENTRATION`).
     ///
     /// Reliable where the posterior is close to a Bingham distribution: measured in
-    /// `tests/nonlinear.rs` against a 10⁶-particle Monte Carlo reference with a camera
-    /// likelihood, the posterior mode agrees within two of the reference's standard errors for
-    /// a prior of 0.14 rad spread and likelihoods of 1 to 0.1 times that spread; for a broad
-    /// prior (0.42 rad) the posterior is visibly non-Bingham and the fit's mode is off by up to
-    /// 0.016 rad. A multimodal likelihood gets a single-mode fit. At most
-    /// [`MAX_TEMPERING_STEPS`] steps; beyond that `Error::NotConverged`. Calls of `log_l`:
-    /// `(steps + CORRECTION_PASSES) × samples` (57 for a Bingham likelihood, d = 4).
+    /// `tests/nonlinear.rs` against 10⁶-sample Monte Carlo references with a camera
+    /// likelihood (figures in `docs/accuracy.md`), the posterior mode agrees within the
+    /// references' standard errors for a prior of 0.14 rad spread and likelihoods of 1 to 0.1
+    /// times that spread; for a broad prior (0.42 rad) the posterior is visibly non-Bingham and
+    /// the fit's mode is off by up to 0.016 rad. A multimodal likelihood gets a single-mode fit.
+    /// At most [`MAX_TEMPERING_STEPS`] steps; beyond that `Error::NotConverged`. Calls of
+    /// `log_l`: `(steps + CORRECTION_PASSES) × samples`: 57 for a Bingham likelihood (d = 4),
+    /// 57–190 for the camera likelihoods of the tests.
     ///
     /// Errors: [`Error::Callback`] (failure or a non-finite value), `NotConverged`, and the
     /// moment-matching errors. On error the filter is unchanged. No heap allocation.
@@ -670,6 +703,17 @@ impl<const D: usize> Core<D> {
         z: &Vect<D>,
         visit: impl FnMut(&Vect<D>, f64) -> Result<()>,
     ) -> Result<()> {
+        Self::for_each_sample_and_probe(m, z, false, visit)
+    }
+
+    /// [`Self::for_each_sample`], followed (if `probes`) by the fit-only probe points of
+    /// [`for_each_probe`] (visited with a negative weight: `−w`).
+    fn for_each_sample_and_probe(
+        m: &Mat<D>,
+        z: &Vect<D>,
+        probes: bool,
+        mut visit: impl FnMut(&Vect<D>, f64) -> Result<()>,
+    ) -> Result<()> {
         let zc = capped(z);
         let mut grad = [0.0; D];
         let mut hess = [0.0; 16];
@@ -679,7 +723,11 @@ impl<const D: usize> Core<D> {
             &mut grad,
             &mut hess[..D * D],
         )?;
-        for_each_point(m, &p, &grad, &hess[..D * D], visit)
+        for_each_point(m, &p, &grad, &hess[..D * D], &mut visit)?;
+        if probes {
+            for_each_probe(m, &p, |x, w| visit(x, -w))?;
+        }
+        Ok(())
     }
 
     fn predict_nonlinear<F>(&mut self, a: &mut F, m_w: &[f64], z_w: &[f64]) -> Result<()>
@@ -730,7 +778,7 @@ impl<const D: usize> Core<D> {
         L: FnMut(&[f64]) -> std::result::Result<f64, String>,
     {
         out.n = 0;
-        Self::for_each_sample(m, z, |x, wt| {
+        Self::for_each_sample_and_probe(m, z, true, |x, wt| {
             let l = log_l(x.as_slice()).map_err(|msg| {
                 Error::Callback(format!(
                     "log-likelihood failed at {x:?} (linearization {iteration}): {msg}",
@@ -745,7 +793,8 @@ impl<const D: usize> Core<D> {
             }
             let k = out.n;
             out.x[k] = *x;
-            out.w[k] = wt;
+            out.w[k] = wt.abs();
+            out.probe[k] = wt < 0.0;
             out.l[k] = l;
             out.n += 1;
             Ok(())
@@ -768,6 +817,10 @@ impl<const D: usize> Core<D> {
     where
         L: FnMut(&[f64]) -> std::result::Result<f64, String>,
     {
+        if z[0] < -MAX_CONCENTRATION {
+            // The samples would be those of the capped distribution, not of the approximation.
+            return Ok((*m, *z));
+        }
         Self::samples_with_log_l(m, z, log_l, step, samples)?;
         let prior = congruence(&self.m, &self.z);
         let approx = congruence(m, z);
@@ -777,15 +830,35 @@ impl<const D: usize> Core<D> {
             let x = &samples.x[k];
             let e = (x.transpose() * (prior - approx) * x)[(0, 0)];
             lr[k] = samples.l[k] + e;
-            top = top.max(lr[k]);
+            if !samples.probe[k] {
+                top = top.max(lr[k]);
+            }
         }
         let mut s = Mat::<D>::zeros();
+        // The weights' effective share: (Σ w r)² / (Σ w · Σ w r²), 1 for a constant ratio r.
+        let (mut sw, mut swr, mut swr2) = (0.0, 0.0, 0.0);
         for k in 0..samples.n {
+            if samples.probe[k] {
+                continue;
+            }
             let x = &samples.x[k];
-            s.ger(samples.w[k] * (lr[k] - top).exp(), x, x, 1.0);
+            let r = (lr[k] - top).exp();
+            s.ger(samples.w[k] * r, x, x, 1.0);
+            sw += samples.w[k];
+            swr += samples.w[k] * r;
+            swr2 += samples.w[k] * r * r;
         }
-        let (m_new, z_new, _) = fit_second_moment(&s, None)?;
-        Ok((m_new, z_new))
+        if swr * swr < MIN_CORRECTION_SHARE * sw * swr2 {
+            // The approximation is too far from the posterior for the points to correct it
+            // (their weights would collapse): keep it.
+            return Ok((*m, *z));
+        }
+        // A moment too close to singular (an approximation sharper than the MLE can represent,
+        // |z| ≳ 1e13) cannot be refitted: the approximation stands.
+        match fit_second_moment(&s, None) {
+            Ok((m_new, z_new, _)) => Ok((m_new, z_new)),
+            Err(_) => Ok((*m, *z)),
+        }
     }
 
     fn update_nonlinear<L>(&mut self, log_l: &mut L) -> Result<()>
@@ -797,7 +870,7 @@ impl<const D: usize> Core<D> {
         let mut remaining = 1.0f64;
         for step in 0..MAX_TEMPERING_STEPS {
             Self::samples_with_log_l(&m, &z, log_l, step, &mut samples)?;
-            let p = samples.fit_exponent();
+            let p = samples.fit_exponent(&m);
             // The fitted exponent's spread over the samples decides the step.
             let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
             for k in 0..samples.n {
@@ -809,12 +882,14 @@ impl<const D: usize> Core<D> {
             let spread = hi - lo;
             // Where the exponent fits log L at every sample (to rounding: log L is a Bingham
             // exponent there), the rest of the likelihood is applied at once.
-            let misfit = samples.misfit(&p);
-            let last = spread * remaining <= TEMPERING_SPREAD || misfit <= 1e-9 * spread;
+            // The step is limited by the part of log L the exponent does not capture (the fit's
+            // residual over the samples): a log-quadratic likelihood is applied at once.
+            let misfit = samples.misfit(&p).max(1e-12 * spread);
+            let last = misfit * remaining <= TEMPERING_RESIDUAL;
             let db = if last {
                 remaining
             } else {
-                TEMPERING_SPREAD / spread
+                TEMPERING_RESIDUAL / misfit
             };
             let (m_new, z_new) = bayes_product(&m, &z, &(p * db))?;
             m = m_new;

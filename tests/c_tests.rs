@@ -226,6 +226,20 @@ fn cpp_eigen_references() {
 }
 
 #[test]
+fn cpp_deterministic_eigen_references() {
+    let inc = eigen_include();
+    let inc = inc.to_str().expect("UTF-8 path");
+    let exe = build(
+        "deterministic_eigen.cpp",
+        "deterministic_eigen",
+        "c++11",
+        &["-isystem", inc],
+        Link::Static,
+    );
+    run(&exe);
+}
+
+#[test]
 fn c_filter_api() {
     let exe = build("filter_api.c", "filter_api", "c99", &[], Link::Static);
     run(&exe);

@@ -53,6 +53,7 @@ fn filter_steps_do_not_allocate() {
     for sc in [scenario_2d(), scenario_4d()] {
         rust_api(&sc);
         c_api(&sc);
+        nonlinear_steps(&sc);
     }
     vector_updates();
     ahrs_steps();
@@ -143,6 +144,59 @@ fn ahrs_steps() {
         samples.len() - 10
     );
     println!("{} AHRS samples: 0 allocations", samples.len() - 10);
+}
+
+/// `predict_nonlinear` (a rotation as the transition) and `update_nonlinear` (the
+/// measurement's Bingham log-likelihood written out, and a non-quadratic one) through the Rust
+/// API: the callbacks allocate nothing, so neither may the steps.
+fn nonlinear_steps(sc: &Scenario) {
+    let meas: Vec<Vec<f64>> = (0..2).flat_map(|r| simulate(sc, r).1).collect();
+    let d = sc.d;
+    let mut f = BinghamFilter::new(d, &sc.m0, &sc.z0).unwrap();
+    let (c, s) = (0.05f64.cos(), 0.05f64.sin());
+    let transition = |x: &[f64], out: &mut [f64]| {
+        if d == 2 {
+            out[0] = x[0] * c - x[1] * s;
+            out[1] = x[0] * s + x[1] * c;
+        } else {
+            out[0] = x[0] * c - x[3] * s;
+            out[1] = x[1] * c + x[2] * s;
+            out[2] = x[2] * c - x[1] * s;
+            out[3] = x[3] * c + x[0] * s;
+        }
+        Ok(())
+    };
+    f.predict_nonlinear(transition, &sc.mw, &sc.zw).unwrap(); // warm-up: the noise cache
+    let before = allocations();
+    let mut calls = 0usize;
+    for (k, y) in meas.iter().enumerate() {
+        f.predict_nonlinear(transition, &sc.mw, &sc.zw).unwrap();
+        // log L(x) = -kappa (1 - <x, y>^2): sharp, Bingham-form; every third step its square
+        // (not log-quadratic: several tempering rounds).
+        let quartic = k % 3 == 0;
+        f.update_nonlinear(|x| {
+            calls += 1;
+            let dot: f64 = x.iter().zip(y).map(|(a, b)| a * b).sum();
+            let e = 1.0 - dot * dot;
+            Ok(if quartic {
+                -50.0 * e - 500.0 * e * e
+            } else {
+                -50.0 * e
+            })
+        })
+        .unwrap();
+    }
+    let n = allocations() - before;
+    assert_eq!(
+        n,
+        0,
+        "d = {d}: {n} allocations in {} nonlinear steps",
+        meas.len()
+    );
+    println!(
+        "d = {d}: {} nonlinear predict + update steps ({calls} likelihood calls): 0 allocations",
+        meas.len()
+    );
 }
 
 fn rust_api(sc: &Scenario) {

@@ -27,6 +27,7 @@ mod common;
 mod fuzz_common;
 
 use std::collections::BTreeMap;
+use std::os::raw::{c_int, c_void};
 use std::time::{Duration, Instant};
 
 use bingham::ffi::*;
@@ -937,8 +938,9 @@ fn run_case(case: &Case, verbose: bool) -> Result<bingham_status, String> {
     let status = unsafe { (spec.call)(&call) };
 
     let code = status_code(status);
-    if !(0..=6).contains(&code) {
-        return Err(format!("unknown status code {code}"));
+    if !(0..=7).contains(&code) || status == BINGHAM_ERR_CALLBACK {
+        // (no callback is involved here)
+        return Err(format!("status code {code}: {}", last_error()));
     }
     if status == BINGHAM_ERR_PANIC {
         return Err(format!("panic caught: {}", last_error()));
@@ -2221,7 +2223,7 @@ fn run_arrays(
     prime_last_error(name);
     let st = call(&ip, &op);
     let code = status_code(st);
-    if !(0..=6).contains(&code) || st == BINGHAM_ERR_PANIC {
+    if !(0..=7).contains(&code) || st == BINGHAM_ERR_PANIC || st == BINGHAM_ERR_CALLBACK {
         return Err(format!("status {code}: {}", last_error()));
     }
     for (i, b) in ib.iter().enumerate() {
@@ -3382,6 +3384,967 @@ fn fuzz_ahrs_sequences() {
     );
 }
 
+// ---- deterministic samples and the nonlinear filter steps ------------------------------------------
+//
+// bingham_deterministic_sample_count / bingham_deterministic_samples: random and hostile d, scheme
+// codes, lambda, capacity (zero, short, exact, larger, SIZE_MAX), NULL and misaligned pointers (also
+// the size_t and int outputs), NaN/Inf and spoiled M and z, one fault at a time. An error has the
+// prescribed status and writes nothing (sentinels, including the spare rows); success writes exactly
+// `count` rows and weights (the rows beyond stay untouched) that satisfy the invariants.
+//
+// bingham_filter_predict_nonlinear / bingham_filter_update_nonlinear: random sequences on a filter
+// and a twin (as for the filter above) with callbacks that succeed (identity, rotations, sign
+// flips, smooth odd maps, outputs unit within the tolerance; quadratic, constant, huge and
+// non-quadratic log-likelihoods) or fail in every way (non-zero return, NaN, ±Inf, non-unit or zero
+// output, nothing written), always or only at the k-th call. A failing callback gives
+// BINGHAM_ERR_CALLBACK after exactly k + 1 calls, with the state (and, through the twin, the hidden
+// state) unchanged; invalid arguments are refused before the first call; the callbacks always see
+// a unit vector, a NaN-filled output and their own user pointer.
+
+/// Share of `BINGHAM_FUZZ_CASES` for the functions of this section (on top of the shares above).
+const SHARE_NONLINEAR: f64 = 0.1;
+
+fn max_samples(d: usize, scheme: c_int) -> usize {
+    if scheme == BINGHAM_SAMPLES_TAC2016 {
+        2 * d - 1
+    } else {
+        2 * d * d - 4 * d + 3
+    }
+}
+
+/// A scheme code: mostly valid, sometimes not; and whether it is valid.
+fn scheme_code(rng: &mut Rng) -> (c_int, bool) {
+    if rng.chance(0.9) {
+        (
+            *rng.pick(&[BINGHAM_SAMPLES_TAC2016, BINGHAM_SAMPLES_MOMENTS]),
+            true,
+        )
+    } else {
+        let random = rng.next_u64() as c_int;
+        let c = *rng.pick(&[-1, 2, 3, c_int::MIN, c_int::MAX, random]);
+        (c, c == 0 || c == 1)
+    }
+}
+
+fn dim_for_samples(rng: &mut Rng) -> usize {
+    if rng.chance(0.06) {
+        *rng.pick(&[0usize, 1, 65, 1000, usize::MAX])
+    } else if rng.chance(0.06) {
+        *rng.pick(&[5usize, 6, 8, 13, 64])
+    } else {
+        2 + rng.below(3)
+    }
+}
+
+fn sample_count_case(seed: u64, verbose: bool) -> Result<&'static str, String> {
+    let mut rng = Rng::new(seed);
+    let d = dim_for_samples(&mut rng);
+    let (scheme, scheme_ok) = scheme_code(&mut rng);
+    let attack = if rng.chance(0.15) {
+        Some(rng.below(8))
+    } else {
+        None
+    };
+    if verbose {
+        eprintln!("d = {d}, scheme = {scheme}, pointer attack {attack:?}");
+    }
+    let mut out = [usize::MAX; 3];
+    let p = match attack {
+        Some(0) => std::ptr::null_mut(),
+        Some(k) => out
+            .as_mut_ptr()
+            .cast::<u8>()
+            .wrapping_add(k)
+            .cast::<usize>(),
+        None => out.as_mut_ptr(),
+    };
+    prime_last_error("bingham_deterministic_sample_count");
+    // SAFETY: p is NULL, misaligned (refused) or points to a writable size_t.
+    let st = unsafe { bingham_deterministic_sample_count(d, scheme, p) };
+    let want = if !(2..=64).contains(&d) {
+        BINGHAM_ERR_INVALID_DIMENSION
+    } else if !scheme_ok {
+        BINGHAM_ERR_INVALID_ARGUMENT
+    } else if attack.is_some() {
+        BINGHAM_ERR_NULL_ARGUMENT
+    } else {
+        BINGHAM_OK
+    };
+    expect(st, Some(want), &format!("d = {d}, scheme = {scheme}"))?;
+    if st != BINGHAM_OK {
+        if out != [usize::MAX; 3] {
+            return Err(format!("{} but wrote {out:?}", status_name(st)));
+        }
+        check_error_message("bingham_deterministic_sample_count")?;
+        return Ok(status_name(st));
+    }
+    if out != [max_samples(d, scheme), usize::MAX, usize::MAX] {
+        return Err(format!("count {out:?} for d = {d}, scheme {scheme}"));
+    }
+    Ok("OK")
+}
+
+/// One fault of a `bingham_deterministic_samples` case.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum SampleFault {
+    None,
+    /// argument 0..6 (m, z, points, weights, count, reproduced): NULL (0) or misaligned by k
+    Pointer(usize, usize),
+    NonFinite,
+    Lambda,
+    SpoilM,
+    SpoilZ,
+    Scheme,
+    Capacity,
+}
+
+const REPRODUCED_SENTINEL: c_int = 0x5A5A_5A5A;
+
+fn deterministic_samples_case(seed: u64, verbose: bool) -> Result<&'static str, String> {
+    let mut rng = Rng::new(seed);
+    let d = dim_for_samples(&mut rng);
+    let bad_d = !(2..=64).contains(&d);
+    let dl = if bad_d { 2 } else { d };
+    let mut fault = match rng.below(20) {
+        0..=9 => SampleFault::None,
+        10 | 11 => {
+            let i = rng.below(6);
+            // misaligned by k bytes (k = 4 would be aligned for the int `reproduced`)
+            let k = if rng.chance(0.6) {
+                0
+            } else {
+                *rng.pick(&[1usize, 2, 3, 5, 6, 7])
+            };
+            SampleFault::Pointer(i, k)
+        }
+        12 => SampleFault::NonFinite,
+        13 => SampleFault::Lambda,
+        14 => SampleFault::SpoilM,
+        15 | 16 => SampleFault::SpoilZ,
+        17 => SampleFault::Scheme,
+        _ => SampleFault::Capacity,
+    };
+    let (mut scheme, scheme_ok) = scheme_code(&mut rng);
+    if fault == SampleFault::Scheme {
+        if scheme_ok {
+            scheme = *rng.pick(&[-1, 2, c_int::MIN, c_int::MAX]);
+        }
+    } else if !scheme_ok {
+        if fault == SampleFault::None {
+            fault = SampleFault::Scheme;
+        } else {
+            scheme = BINGHAM_SAMPLES_MOMENTS;
+        }
+    }
+    let len_scheme = if fault == SampleFault::Scheme {
+        BINGHAM_SAMPLES_MOMENTS
+    } else {
+        scheme
+    };
+    let needed = max_samples(dl, len_scheme);
+    let moderate = rng.chance(0.7) && fault != SampleFault::SpoilZ;
+    let mut m = orthogonal(&mut rng, dl);
+    let mut z = if moderate {
+        z_moderate(&mut rng, dl)
+    } else {
+        z_vector(&mut rng, dl)
+    };
+    let mut lambda = match rng.below(6) {
+        0 => 0.0,
+        1 => 1.0,
+        _ => rng.unit(),
+    };
+    let mut capacity = match rng.below(10) {
+        0 => needed + 1 + rng.below(5),
+        // the library writes at most the needed count: a capacity beyond the buffers is never
+        // used (the buffers hold needed + 5 rows), and must not overflow anything
+        1 => usize::MAX,
+        _ => needed,
+    };
+    let mut desc = format!("{fault:?}");
+    match fault {
+        SampleFault::NonFinite => {
+            let v = if rng.chance(0.5) { &mut m } else { &mut z };
+            let i = rng.below(v.len());
+            v[i] = non_finite(&mut rng);
+        }
+        SampleFault::Lambda => {
+            lambda = match rng.below(3) {
+                0 => non_finite(&mut rng),
+                1 => -rng.log_uniform(-320.0, 300.0),
+                _ => 1.0 + rng.log_uniform(-15.0, 300.0),
+            };
+            desc = format!("lambda = {lambda:e}");
+        }
+        SampleFault::SpoilM => desc = spoil(&mut rng, M, &mut m, dl),
+        SampleFault::SpoilZ => desc = spoil(&mut rng, Z, &mut z, dl),
+        SampleFault::Capacity => {
+            capacity = if rng.chance(0.3) {
+                0
+            } else {
+                needed - 1 - rng.below(needed.min(3))
+            };
+            desc = format!("capacity {capacity} < {needed}");
+        }
+        _ => {}
+    }
+    if verbose {
+        eprintln!(
+            "d = {d}, scheme {scheme}, lambda {lambda:e}, capacity {capacity}, {desc}\n m = {m:?}\n z = {z:?}"
+        );
+    }
+    let rows = capacity.min(needed + 5);
+    let mut mb = Buf::from(&m);
+    let mut zb = Buf::from(&z);
+    let (m_bits, z_bits) = (mb.bits(), zb.bits());
+    let mut pb = Buf::sentinel(rows * dl);
+    let mut wb = Buf::sentinel(rows);
+    let mut count = [usize::MAX; 3];
+    let mut reproduced = [REPRODUCED_SENTINEL; 3];
+    let dang = bad_d && rng.chance(0.5);
+    let mut ptrs: [*mut u8; 6] = [
+        mb.ptr().cast(),
+        zb.ptr().cast(),
+        pb.ptr().cast(),
+        wb.ptr().cast(),
+        count.as_mut_ptr().cast(),
+        reproduced.as_mut_ptr().cast(),
+    ];
+    if let SampleFault::Pointer(i, k) = fault {
+        ptrs[i] = if k == 0 {
+            std::ptr::null_mut()
+        } else {
+            ptrs[i].wrapping_add(k)
+        };
+    }
+    if dang {
+        ptrs = [dangling().cast(); 6];
+    }
+    prime_last_error("bingham_deterministic_samples");
+    // SAFETY: m: d*d and z: d readable doubles, points: rows*d and weights: rows writable doubles
+    // with rows >= the count the library may write, count and reproduced one element each; or
+    // NULL / misaligned (refused) / dangling with an invalid d (refused before any access).
+    let st = unsafe {
+        bingham_deterministic_samples(
+            d,
+            ptrs[0] as *const f64,
+            ptrs[1] as *const f64,
+            scheme,
+            lambda,
+            capacity,
+            ptrs[2].cast(),
+            ptrs[3].cast(),
+            ptrs[4].cast(),
+            ptrs[5].cast(),
+        )
+    };
+    let code = status_code(st);
+    if !(0..=7).contains(&code) || st == BINGHAM_ERR_PANIC || st == BINGHAM_ERR_CALLBACK {
+        return Err(format!("status {code}: {}", last_error()));
+    }
+    if mb.bits() != m_bits || zb.bits() != z_bits {
+        return Err("an input was modified".into());
+    }
+    let tac = scheme == BINGHAM_SAMPLES_TAC2016;
+    let (zmax, zmin) = z
+        .iter()
+        .fold((f64::NEG_INFINITY, f64::INFINITY), |(a, b), &v| {
+            (a.max(v), b.min(v))
+        });
+    let span_overflows = !(zmax - zmin).is_finite();
+    let want = if bad_d {
+        Some(BINGHAM_ERR_INVALID_DIMENSION)
+    } else {
+        match fault {
+            SampleFault::Scheme | SampleFault::NonFinite => Some(BINGHAM_ERR_INVALID_ARGUMENT),
+            SampleFault::Lambda if tac => Some(BINGHAM_ERR_INVALID_ARGUMENT),
+            // (`reproduced` may be NULL)
+            SampleFault::Pointer(i, k) if i != 5 || k != 0 => Some(BINGHAM_ERR_NULL_ARGUMENT),
+            SampleFault::Capacity => Some(BINGHAM_ERR_INVALID_DIMENSION),
+            // (z spanning more than a double is refused like everywhere)
+            _ if span_overflows => Some(BINGHAM_ERR_INVALID_ARGUMENT),
+            SampleFault::None | SampleFault::Lambda | SampleFault::Pointer(..) if moderate => {
+                Some(BINGHAM_OK)
+            }
+            _ => None,
+        }
+    };
+    expect(st, want, &desc)?;
+    let untouched = pb.untouched()
+        && wb.untouched()
+        && count == [usize::MAX; 3]
+        && reproduced == [REPRODUCED_SENTINEL; 3];
+    if st != BINGHAM_OK {
+        if !untouched {
+            return Err(format!("{} but an output was written", status_name(st)));
+        }
+        check_error_message("bingham_deterministic_samples")?;
+        if !bad_d
+            && fault == SampleFault::Capacity
+            && !last_error().contains(&format!("the {needed} points"))
+        {
+            return Err(format!("message does not give the count: {}", last_error()));
+        }
+        // extreme z may fail (log F's moments); every other failure was expected
+        let tolerated = fault == SampleFault::SpoilM
+            || (!moderate && matches!(st, BINGHAM_ERR_NUMERICAL | BINGHAM_ERR_NOT_CONVERGED));
+        if want.is_none() && !tolerated {
+            return Err(format!("unexpected {}: {}", status_name(st), last_error()));
+        }
+        return Ok(status_name(st));
+    }
+    // success
+    let n = count[0];
+    if count[1..] != [usize::MAX; 2] || reproduced[1..] != [REPRODUCED_SENTINEL; 2] {
+        return Err("wrote past count / reproduced".into());
+    }
+    let rep = reproduced[0];
+    let no_rep = fault == SampleFault::Pointer(5, 0);
+    if no_rep != (rep == REPRODUCED_SENTINEL) {
+        return Err(format!("reproduced = {rep:#x} (NULL passed: {no_rep})"));
+    }
+    let expect_n = |r: c_int| {
+        if r == 4 {
+            max_samples(d, BINGHAM_SAMPLES_MOMENTS)
+        } else {
+            2 * d - 1
+        }
+    };
+    // 2 (second moment) or, for MOMENTS only, 4 (fourth moments too)
+    let rep_ok = rep == 2 || (rep == 4 && !tac);
+    if !no_rep && (!rep_ok || n != expect_n(rep)) {
+        return Err(format!(
+            "count {n}, reproduced {rep} (scheme {scheme}, d = {d})"
+        ));
+    }
+    if n > needed || (n != 2 * d - 1 && n != max_samples(d, BINGHAM_SAMPLES_MOMENTS)) {
+        return Err(format!("count {n} (needed {needed})"));
+    }
+    if !pb.guards_ok() || !wb.guards_ok() {
+        return Err("wrote outside the buffers".into());
+    }
+    if !pb.untouched_range(n * d, rows * d) || !wb.untouched_range(n, rows) {
+        return Err("wrote rows beyond count".into());
+    }
+    let pts = pb.values();
+    let ws = wb.values();
+    let mut sum = 0.0;
+    for k in 0..n {
+        check_unit(&pts[k * d..(k + 1) * d], 1e-12).map_err(|e| format!("point {k}: {e}"))?;
+        if !(ws[k].is_finite() && ws[k] >= 0.0) {
+            return Err(format!("weight {k} = {}", ws[k]));
+        }
+        sum += ws[k];
+    }
+    if (sum - 1.0).abs() > 1e-12 {
+        return Err(format!("weights sum to 1 + {:e}", sum - 1.0));
+    }
+    // the weighted second moment is the distribution's (moderate z, d <= 8)
+    if moderate && d <= 8 {
+        let mut s = vec![0.0; d * d];
+        // SAFETY: valid buffers of lengths d*d, d, d*d.
+        let st = unsafe { bingham_second_moment(d, m.as_ptr(), z.as_ptr(), s.as_mut_ptr()) };
+        if st != BINGHAM_OK {
+            return Err(format!("second moment: {}", last_error()));
+        }
+        for r in 0..d {
+            for c in 0..d {
+                let v: f64 = (0..n)
+                    .map(|k| ws[k] * pts[k * d + r] * pts[k * d + c])
+                    .sum();
+                if (v - s[r * d + c]).abs() > 1e-11 {
+                    return Err(format!(
+                        "E[x xᵀ][{r}][{c}] = {v} from the points, {} exact",
+                        s[r * d + c]
+                    ));
+                }
+            }
+        }
+    }
+    Ok("OK")
+}
+
+#[test]
+fn fuzz_deterministic_sample_count() {
+    let n = cases_for(1.0, 10.0, SHARE_NONLINEAR);
+    drive(
+        "bingham_deterministic_sample_count",
+        50,
+        n,
+        sample_count_case,
+    );
+}
+
+#[test]
+fn fuzz_deterministic_samples() {
+    let n = cases_for(5.0, 10.0, SHARE_NONLINEAR);
+    drive(
+        "bingham_deterministic_samples",
+        51,
+        n,
+        deterministic_samples_case,
+    );
+}
+
+// -- the callbacks
+
+const CB_MAGIC: u64 = 0xB1E5_5ED0_CA11_BAC5;
+
+/// What a callback does when it misbehaves.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum CbBad {
+    Rc(c_int),
+    Nan(usize),
+    Inf(usize, f64),
+    /// the (otherwise valid) output times this factor: not unit
+    Scale(f64),
+    Zero,
+    /// returns 0 without writing
+    Nothing,
+}
+
+/// What a callback does otherwise.
+#[derive(Debug, Clone, PartialEq)]
+enum CbGood {
+    Identity,
+    /// x -> x (+) u
+    Rotate(Vec<f64>),
+    Negate,
+    /// x -> normalize(x + c x³) (odd)
+    Cubic(f64),
+    /// identity times s, |s − 1| within the tolerance
+    AlmostUnit(f64),
+    /// log L = xᵀ P x
+    Quadratic(Vec<f64>),
+    Constant(f64),
+    /// log L = −kappa (1 − (vᵀx)²)²
+    Quartic(f64, Vec<f64>),
+}
+
+#[derive(Debug, Clone)]
+struct CbCtx {
+    magic: u64,
+    d: usize,
+    good: CbGood,
+    bad: Option<CbBad>,
+    /// misbehave at this call only (None: at every call, if `bad` is set)
+    fail_at: Option<usize>,
+    calls: usize,
+    /// the call at which the callback misbehaved
+    triggered: Option<usize>,
+    /// a contract violation seen by the callback (x not unit, output not NaN-filled, ...)
+    violation: Option<String>,
+}
+
+impl CbCtx {
+    fn reset(&mut self) {
+        self.calls = 0;
+        self.triggered = None;
+        self.violation = None;
+    }
+
+    /// The call index, and whether to misbehave now.
+    fn enter(&mut self, x: &[f64]) -> bool {
+        let k = self.calls;
+        self.calls += 1;
+        if self.violation.is_none() {
+            if let Err(e) = check_unit(x, 1e-12) {
+                self.violation = Some(format!("call {k}: x = {x:?}: {e}"));
+            }
+        }
+        let now = self.bad.is_some() && self.fail_at.is_none_or(|j| j == k);
+        if now && self.triggered.is_none() {
+            self.triggered = Some(k);
+        }
+        now
+    }
+}
+
+fn compose(x: &[f64], u: &[f64]) -> Vec<f64> {
+    if x.len() == 2 {
+        vec![x[0] * u[0] - x[1] * u[1], x[0] * u[1] + x[1] * u[0]]
+    } else {
+        vec![
+            x[0] * u[0] - x[1] * u[1] - x[2] * u[2] - x[3] * u[3],
+            x[0] * u[1] + x[1] * u[0] + x[2] * u[3] - x[3] * u[2],
+            x[0] * u[2] - x[1] * u[3] + x[2] * u[0] + x[3] * u[1],
+            x[0] * u[3] + x[1] * u[2] - x[2] * u[1] + x[3] * u[0],
+        ]
+    }
+}
+
+/// `bingham_transition_fn` driven by a `CbCtx`. Must not panic (it is called through C).
+unsafe extern "C" fn fuzz_transition(
+    x_in: *const f64,
+    x_out: *mut f64,
+    user: *mut c_void,
+) -> c_int {
+    // SAFETY: user is the CbCtx passed with this callback; x_in, x_out have d doubles each
+    // (the library's contract, checked below as far as possible).
+    let c = unsafe { &mut *user.cast::<CbCtx>() };
+    if c.magic != CB_MAGIC {
+        return 99;
+    }
+    let d = c.d;
+    // SAFETY: as above.
+    let (x, out) = unsafe {
+        (
+            std::slice::from_raw_parts(x_in, d),
+            std::slice::from_raw_parts_mut(x_out, d),
+        )
+    };
+    if c.violation.is_none() && !out.iter().all(|v| v.is_nan()) {
+        c.violation = Some(format!("call {}: x_out = {out:?} not NaN-filled", c.calls));
+    }
+    let bad = c.enter(x);
+    let mut y = match &c.good {
+        CbGood::Rotate(u) => compose(x, u),
+        CbGood::Negate => x.iter().map(|v| -v).collect(),
+        CbGood::Cubic(k) => {
+            let v: Vec<f64> = x.iter().map(|t| t + k * t * t * t).collect();
+            let n = norm(&v);
+            v.iter().map(|t| t / n).collect()
+        }
+        CbGood::AlmostUnit(s) => x.iter().map(|t| t * s).collect(),
+        _ => x.to_vec(),
+    };
+    if bad {
+        match c.bad {
+            Some(CbBad::Rc(rc)) => return rc,
+            Some(CbBad::Nan(i)) => y[i % d] = f64::NAN,
+            Some(CbBad::Inf(i, s)) => y[i % d] = s * f64::INFINITY,
+            Some(CbBad::Scale(s)) => y.iter_mut().for_each(|t| *t *= s),
+            Some(CbBad::Zero) => y.iter_mut().for_each(|t| *t = 0.0),
+            Some(CbBad::Nothing) | None => return 0,
+        }
+    }
+    out.copy_from_slice(&y);
+    0
+}
+
+/// `bingham_log_likelihood_fn` driven by a `CbCtx`. Must not panic.
+unsafe extern "C" fn fuzz_log_likelihood(
+    x: *const f64,
+    log_l: *mut f64,
+    user: *mut c_void,
+) -> c_int {
+    // SAFETY: user is the CbCtx passed with this callback; x has d doubles, log_l one.
+    let c = unsafe { &mut *user.cast::<CbCtx>() };
+    if c.magic != CB_MAGIC {
+        return 99;
+    }
+    let d = c.d;
+    // SAFETY: as above.
+    let (x, out) = unsafe { (std::slice::from_raw_parts(x, d), &mut *log_l) };
+    if c.violation.is_none() && !out.is_nan() {
+        c.violation = Some(format!("call {}: *log_l = {out} not NaN", c.calls));
+    }
+    let bad = c.enter(x);
+    let v = match &c.good {
+        CbGood::Quadratic(p) => (0..d)
+            .map(|i| (0..d).map(|j| x[i] * p[i * d + j] * x[j]).sum::<f64>())
+            .sum(),
+        CbGood::Constant(v) => *v,
+        CbGood::Quartic(kappa, v) => {
+            let c: f64 = (0..d).map(|i| v[i] * x[i]).sum();
+            let s2 = 1.0 - c * c;
+            -kappa * s2 * s2
+        }
+        _ => 0.0,
+    };
+    if bad {
+        match c.bad {
+            Some(CbBad::Rc(rc)) => return rc,
+            Some(CbBad::Nan(_)) => *out = f64::NAN,
+            Some(CbBad::Inf(_, s)) => *out = s * f64::INFINITY,
+            Some(CbBad::Nothing) | None | Some(_) => return 0,
+        }
+        return 0;
+    }
+    *out = v;
+    0
+}
+
+fn nonzero_rc(rng: &mut Rng) -> c_int {
+    match rng.below(4) {
+        0 => 1,
+        1 => -1,
+        2 => *rng.pick(&[c_int::MIN, c_int::MAX, 42]),
+        _ => (rng.next_u64() as c_int) | 1,
+    }
+}
+
+fn transition_ctx(rng: &mut Rng, d: usize) -> CbCtx {
+    let good = match rng.below(6) {
+        0 | 1 => CbGood::Identity,
+        2 => CbGood::Rotate(unit_vector(rng, d)),
+        3 => CbGood::Negate,
+        4 => CbGood::Cubic(rng.range(-0.5, 0.5)),
+        _ => CbGood::AlmostUnit(1.0 + rng.range(-1e-8, 1e-8)),
+    };
+    let bad = if rng.chance(0.5) {
+        Some(match rng.below(6) {
+            0 => CbBad::Rc(nonzero_rc(rng)),
+            1 => CbBad::Nan(rng.below(4)),
+            2 => CbBad::Inf(rng.below(4), if rng.chance(0.5) { 1.0 } else { -1.0 }),
+            3 => CbBad::Scale(match rng.below(4) {
+                0 => 1.0 + rng.log_uniform(-5.0, 0.0),
+                1 => 1.0 - rng.log_uniform(-5.0, -0.1),
+                2 => rng.log_uniform(10.0, 300.0),
+                _ => rng.log_uniform(-320.0, -10.0),
+            }),
+            4 => CbBad::Zero,
+            _ => CbBad::Nothing,
+        })
+    } else {
+        None
+    };
+    let fail_at = if rng.chance(0.6) {
+        Some(rng.below(25))
+    } else {
+        None
+    };
+    CbCtx {
+        magic: CB_MAGIC,
+        d,
+        good,
+        bad,
+        fail_at,
+        calls: 0,
+        triggered: None,
+        violation: None,
+    }
+}
+
+fn likelihood_ctx(rng: &mut Rng, d: usize) -> CbCtx {
+    let good = match rng.below(6) {
+        0..=2 => {
+            let m = orthogonal(rng, d);
+            let top = if rng.chance(0.9) { 2.5 } else { 12.0 };
+            let scale = rng.log_uniform(-3.0, top);
+            let w: Vec<f64> = (0..d).map(|_| -scale * rng.unit()).collect();
+            CbGood::Quadratic(congruence(&m, &w, d))
+        }
+        3 => CbGood::Constant(match rng.below(3) {
+            0 => 0.0,
+            1 => rng.range(-1e3, 1e3),
+            _ => extreme(rng),
+        }),
+        _ => CbGood::Quartic(rng.log_uniform(-2.0, 2.0), unit_vector(rng, d)),
+    };
+    let bad = if rng.chance(0.5) {
+        Some(match rng.below(4) {
+            0 => CbBad::Rc(nonzero_rc(rng)),
+            1 => CbBad::Nan(0),
+            2 => CbBad::Inf(0, if rng.chance(0.5) { 1.0 } else { -1.0 }),
+            _ => CbBad::Nothing,
+        })
+    } else {
+        None
+    };
+    let fail_at = if rng.chance(0.6) {
+        Some(rng.below(60))
+    } else {
+        None
+    };
+    CbCtx {
+        magic: CB_MAGIC,
+        d,
+        good,
+        bad,
+        fail_at,
+        calls: 0,
+        triggered: None,
+        violation: None,
+    }
+}
+
+/// An argument fault of a nonlinear step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum NlFault {
+    None,
+    NullHandle,
+    MisalignedHandle,
+    NullFn,
+    /// m_w (0) or z_w (1): NULL
+    NullNoise(usize),
+    MisalignedNoise(usize),
+    NonFiniteNoise(usize),
+}
+
+/// Runs one nonlinear sequence; returns the number of calls made.
+fn nonlinear_sequence(
+    seed: u64,
+    verbose: bool,
+    stats: &mut BTreeMap<String, u64>,
+) -> Result<u64, String> {
+    let mut rng = Rng::new(seed);
+    let d = if rng.chance(0.5) { 2 } else { 4 };
+    let m0 = orthogonal(&mut rng, d);
+    let mut z0 = if rng.chance(0.7) {
+        z_moderate(&mut rng, d)
+    } else {
+        z_vector(&mut rng, d)
+    };
+    let (zmax, zmin) = z0
+        .iter()
+        .fold((f64::NEG_INFINITY, f64::INFINITY), |(a, b), &v| {
+            (a.max(v), b.min(v))
+        });
+    if !(zmax - zmin).is_finite() {
+        // (refused by bingham_filter_new; the sequences of the filter test cover that)
+        z0 = z_moderate(&mut rng, d);
+    }
+    let (mut f, mut twin) = (std::ptr::null_mut(), std::ptr::null_mut());
+    // SAFETY: valid buffers and out-pointers.
+    let (s1, s2) = unsafe {
+        (
+            bingham_filter_new(d, m0.as_ptr(), z0.as_ptr(), &mut f),
+            bingham_filter_new(d, m0.as_ptr(), z0.as_ptr(), &mut twin),
+        )
+    };
+    if s1 != BINGHAM_OK || s2 != BINGHAM_OK {
+        return Err(format!("bingham_filter_new: {}", last_error()));
+    }
+    let pool: Vec<(Vec<f64>, Vec<f64>)> = (0..2).map(|_| filter_noise(&mut rng, d)).collect();
+    if verbose {
+        eprintln!("d = {d}, m0 = {m0:?}, z0 = {z0:?}, noise pool {pool:?}");
+    }
+    let steps = 1 + rng.below(12);
+    let mut calls = 0u64;
+    let mut result = Ok(());
+    for step in 0..steps {
+        let predict = rng.chance(0.5);
+        let name = if predict {
+            "bingham_filter_predict_nonlinear"
+        } else {
+            "bingham_filter_update_nonlinear"
+        };
+        let mut ctx = if predict {
+            transition_ctx(&mut rng, d)
+        } else {
+            likelihood_ctx(&mut rng, d)
+        };
+        let (mut mw, mut zw) = pool[rng.below(pool.len())].clone();
+        let fault = match rng.below(24) {
+            0 => NlFault::NullHandle,
+            1 => NlFault::MisalignedHandle,
+            2 => NlFault::NullFn,
+            3 if predict => NlFault::NullNoise(rng.below(2)),
+            4 if predict => NlFault::MisalignedNoise(rng.below(2)),
+            5 if predict => NlFault::NonFiniteNoise(rng.below(2)),
+            _ => NlFault::None,
+        };
+        if let NlFault::NonFiniteNoise(i) = fault {
+            let v = if i == 0 { &mut mw } else { &mut zw };
+            let j = rng.below(v.len());
+            v[j] = non_finite(&mut rng);
+        }
+        let mut mwb = Buf::from(&mw);
+        let mut zwb = Buf::from(&zw);
+        let mut mp = mwb.ptr() as *const f64;
+        let mut zp = zwb.ptr() as *const f64;
+        match fault {
+            NlFault::NullNoise(0) => mp = std::ptr::null(),
+            NlFault::NullNoise(_) => zp = std::ptr::null(),
+            NlFault::MisalignedNoise(0) => mp = mwb.misaligned(3),
+            NlFault::MisalignedNoise(_) => zp = zwb.misaligned(5),
+            _ => {}
+        }
+        let fp = match fault {
+            NlFault::NullHandle => std::ptr::null_mut(),
+            NlFault::MisalignedHandle => f.cast::<u8>().wrapping_add(4).cast(),
+            _ => f,
+        };
+        let before = state_bits(f, d);
+        prime_last_error(name);
+        if verbose {
+            eprintln!("step {step}: {name} {fault:?} {ctx:?}");
+        }
+        let user = (&mut ctx as *mut CbCtx).cast::<c_void>();
+        // SAFETY: f is live (or NULL / misaligned: refused); the callbacks match the contract;
+        // noise buffers of d*d and d doubles, or NULL / misaligned (refused).
+        let st = unsafe {
+            if predict {
+                let cb: bingham_transition_fn = if fault == NlFault::NullFn {
+                    None
+                } else {
+                    Some(fuzz_transition)
+                };
+                bingham_filter_predict_nonlinear(fp, cb, user, mp, zp)
+            } else {
+                let cb: bingham_log_likelihood_fn = if fault == NlFault::NullFn {
+                    None
+                } else {
+                    Some(fuzz_log_likelihood)
+                };
+                bingham_filter_update_nonlinear(fp, cb, user)
+            }
+        };
+        calls += 1;
+        *stats
+            .entry(format!(
+                "{}:{}",
+                if predict { "predict" } else { "update" },
+                status_name(st)
+            ))
+            .or_default() += 1;
+        if verbose {
+            eprintln!(
+                "    -> {} after {} callback calls (triggered {:?}) {}",
+                status_name(st),
+                ctx.calls,
+                ctx.triggered,
+                if st == BINGHAM_OK {
+                    String::new()
+                } else {
+                    last_error()
+                }
+            );
+        }
+        let ctx_desc = format!("step {step} {name} {fault:?} {ctx:?}");
+        let fail = |msg: String| Err(format!("{ctx_desc}: {msg}"));
+        let code = status_code(st);
+        if !(0..=7).contains(&code) || st == BINGHAM_ERR_PANIC {
+            result = fail(format!("status {code}: {}", last_error()));
+            break;
+        }
+        if mwb
+            .values()
+            .iter()
+            .zip(&mw)
+            .any(|(a, b)| a.to_bits() != b.to_bits())
+            || zwb
+                .values()
+                .iter()
+                .zip(&zw)
+                .any(|(a, b)| a.to_bits() != b.to_bits())
+            || !mwb.guards_ok()
+            || !zwb.guards_ok()
+        {
+            result = fail("the noise was modified".into());
+            break;
+        }
+        if let Some(v) = &ctx.violation {
+            result = fail(format!("callback contract violated by the library: {v}"));
+            break;
+        }
+        let want = match fault {
+            NlFault::None => None,
+            NlFault::NonFiniteNoise(_) => Some(BINGHAM_ERR_INVALID_ARGUMENT),
+            _ => Some(BINGHAM_ERR_NULL_ARGUMENT),
+        };
+        if let Some(w) = want {
+            if st != w || ctx.calls != 0 {
+                result = fail(format!(
+                    "{} after {} callback calls instead of {} before any",
+                    status_name(st),
+                    ctx.calls,
+                    status_name(w)
+                ));
+                break;
+            }
+        } else if let Some(k) = ctx.triggered {
+            if st != BINGHAM_ERR_CALLBACK || ctx.calls != k + 1 {
+                result = fail(format!(
+                    "the callback misbehaved at call {k}: {} after {} calls ({})",
+                    status_name(st),
+                    ctx.calls,
+                    last_error()
+                ));
+                break;
+            }
+        } else if !matches!(
+            st,
+            BINGHAM_OK | BINGHAM_ERR_NOT_CONVERGED | BINGHAM_ERR_NUMERICAL
+        ) {
+            result = fail(format!("valid call refused: {}", last_error()));
+            break;
+        }
+        let after = state_bits(f, d);
+        if st != BINGHAM_OK {
+            if after != before {
+                result = fail(format!("{} but the state changed", status_name(st)));
+                break;
+            }
+            if let Err(e) = check_error_message(name) {
+                result = fail(e);
+                break;
+            }
+        } else {
+            let (m, z) = filter_state(f, d);
+            if let Err(e) = check_state(&m, &z, d) {
+                result = fail(format!("state invalid after success: {e}"));
+                break;
+            }
+            // the twin repeats the successful call
+            ctx.reset();
+            let user = (&mut ctx as *mut CbCtx).cast::<c_void>();
+            // SAFETY: as above, with valid arguments.
+            let st2 = unsafe {
+                if predict {
+                    bingham_filter_predict_nonlinear(
+                        twin,
+                        Some(fuzz_transition),
+                        user,
+                        mw.as_ptr(),
+                        zw.as_ptr(),
+                    )
+                } else {
+                    bingham_filter_update_nonlinear(twin, Some(fuzz_log_likelihood), user)
+                }
+            };
+            if st2 != BINGHAM_OK {
+                result = fail(format!("twin failed: {}", last_error()));
+                break;
+            }
+        }
+        if state_bits(twin, d) != state_bits(f, d) {
+            result = fail(
+                "the twin (which saw only the successful calls) differs: a failed call changed hidden state"
+                    .into(),
+            );
+            break;
+        }
+        // now and then a linear step on both, to move the state and exercise the caches
+        if rng.chance(0.3) {
+            let (pm, pz) = &pool[rng.below(pool.len())];
+            // SAFETY: live handles, valid noise buffers.
+            let (a, b) = unsafe {
+                (
+                    bingham_filter_predict(f, pm.as_ptr(), pz.as_ptr()),
+                    bingham_filter_predict(twin, pm.as_ptr(), pz.as_ptr()),
+                )
+            };
+            if a != b {
+                result = fail("linear predict differs between filter and twin".into());
+                break;
+            }
+        }
+    }
+    // SAFETY: live handles, freed once.
+    unsafe {
+        bingham_filter_free(f);
+        bingham_filter_free(twin);
+    }
+    result.map(|()| calls)
+}
+
+#[test]
+fn fuzz_filter_nonlinear() {
+    let mut stats: BTreeMap<String, u64> = BTreeMap::new();
+    run_sequences(
+        "bingham_filter_nonlinear",
+        "filter_nonlinear",
+        52,
+        cases_for(4.0, 10.0, SHARE_NONLINEAR),
+        |seed, verbose| nonlinear_sequence(seed, verbose, &mut stats),
+    );
+    if stats_wanted() {
+        eprintln!("bingham_filter_nonlinear statuses: {stats:?}");
+    }
+}
+
 // ---- the small helpers ------------------------------------------------------------------------
 
 #[test]
@@ -3391,7 +4354,7 @@ fn fuzz_status_str_and_last_error_message() {
         return; // reproducing a case of another test
     }
     let slot = CaseSlot::new("helpers");
-    let known: Vec<String> = (0..=6)
+    let known: Vec<String> = (0..=7)
         .map(|c| {
             // SAFETY: any int is accepted; the result is a static C string.
             let p = bingham_status_str(c);
@@ -3424,7 +4387,7 @@ fn fuzz_status_str_and_last_error_message() {
         let s = unsafe { std::ffi::CStr::from_ptr(p) }
             .to_str()
             .expect("UTF-8");
-        if (0..=6).contains(&code) {
+        if (0..=7).contains(&code) {
             assert_eq!(s, known[code as usize]);
         } else {
             assert_eq!(s, "unknown status", "status_str({code})");

@@ -404,10 +404,19 @@ fn camera_log_l(x: &[f64], b: &[f64; 3], meas: &[f64; 2], sigma: f64) -> f64 {
     -0.5 * r2 / (sigma * sigma)
 }
 
-/// The rotation angle between two orientations (axes): `2 acos |⟨p, q⟩|`.
+/// The rotation angle between two orientations (axes), `2 acos |⟨p, q⟩|`, computed as
+/// `4 asin(‖p − s q‖ / 2)` with `s = sign ⟨p, q⟩` (accurate for small angles, where the acos
+/// form loses half the digits).
 fn angle(p: &[f64], q: &[f64]) -> f64 {
-    let c: f64 = p.iter().zip(q).map(|(a, b)| a * b).sum::<f64>().abs();
-    2.0 * c.min(1.0).acos()
+    let dot: f64 = p.iter().zip(q).map(|(a, b)| a * b).sum();
+    let s = if dot < 0.0 { -1.0 } else { 1.0 };
+    let chord = p
+        .iter()
+        .zip(q)
+        .map(|(a, b)| (a - s * b).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    4.0 * (0.5 * chord).min(1.0).asin()
 }
 
 fn top_eigenvector(s: &DMatrix<f64>) -> Vec<f64> {

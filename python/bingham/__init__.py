@@ -35,7 +35,7 @@ import enum
 import glob
 import os
 import re
-from typing import Any, Dict, Iterator, Optional, Tuple, Union
+from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -75,6 +75,7 @@ __all__ = [
     "rotate_left",
     "rotate_right",
     "mode",
+    "deterministic_samples",
     "Filter",
     "vector_observation",
     "noise_from_angle_std",
@@ -99,6 +100,7 @@ class Status(enum.IntEnum):
     ERR_NOT_CONVERGED = 4
     ERR_NUMERICAL = 5
     ERR_PANIC = 6
+    ERR_CALLBACK = 7
 
 
 class BinghamError(Exception):
@@ -118,6 +120,11 @@ class BinghamError(Exception):
 _D = ctypes.POINTER(ctypes.c_double)
 _SIZE = ctypes.c_size_t
 _STATUS = ctypes.c_int
+
+#: ``bingham_transition_fn``: ``int fn(const double *x_in, double *x_out, void *user_data)``.
+_TRANSITION_FN = ctypes.CFUNCTYPE(ctypes.c_int, _D, _D, ctypes.c_void_p)
+#: ``bingham_log_likelihood_fn``: ``int fn(const double *x, double *log_l, void *user_data)``.
+_LOG_LIKELIHOOD_FN = ctypes.CFUNCTYPE(ctypes.c_int, _D, _D, ctypes.c_void_p)
 
 # name -> (restype, argtypes), in the order of the header.
 _SIGNATURES = {
@@ -144,6 +151,14 @@ _SIGNATURES = {
     "bingham_rotate_left": (_STATUS, [_SIZE, _D, _D, _D, _D, _D]),
     "bingham_rotate_right": (_STATUS, [_SIZE, _D, _D, _D, _D, _D]),
     "bingham_mode": (_STATUS, [_SIZE, _D, _D, _D]),
+    "bingham_deterministic_sample_count": (_STATUS, [_SIZE, ctypes.c_int, ctypes.POINTER(_SIZE)]),
+    "bingham_deterministic_samples": (
+        _STATUS,
+        [
+            _SIZE, _D, _D, ctypes.c_int, ctypes.c_double, _SIZE, _D, _D,
+            ctypes.POINTER(_SIZE), ctypes.POINTER(ctypes.c_int),
+        ],
+    ),
     "bingham_filter_new": (_STATUS, [_SIZE, _D, _D, ctypes.POINTER(ctypes.c_void_p)]),
     "bingham_filter_free": (None, [ctypes.c_void_p]),
     "bingham_filter_clone": (_STATUS, [ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p)]),
@@ -160,6 +175,8 @@ _SIGNATURES = {
         _STATUS,
         [ctypes.c_void_p, _D, _D, ctypes.c_double, _D],
     ),
+    "bingham_filter_predict_nonlinear": (_STATUS, [ctypes.c_void_p, _TRANSITION_FN, ctypes.c_void_p, _D, _D]),
+    "bingham_filter_update_nonlinear": (_STATUS, [ctypes.c_void_p, _LOG_LIKELIHOOD_FN, ctypes.c_void_p]),
     "bingham_filter_angular_spread": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_vector_observation": (_STATUS, [_D, _D, ctypes.c_double, _D, _D]),
     "bingham_noise_from_angle_std": (_STATUS, [_SIZE, ctypes.c_double, _D, _D]),
@@ -509,13 +526,91 @@ def mode(m: ArrayLike, z: ArrayLike) -> Array:
     return out
 
 
+#: The deterministic sampling schemes (``BINGHAM_SAMPLES_*``) by name.
+_SCHEMES = {"tac2016": 0, "moments": 1}
+
+
+def deterministic_samples(
+    m: ArrayLike, z: ArrayLike, scheme: str = "moments", lam: float = 0.5
+) -> Tuple[Array, Array, int]:
+    """Deterministic samples of Bingham(m, z): ``(points, weights, reproduced)``.
+
+    ``points`` is n×d (unit vectors, each in the mode's hemisphere), ``weights`` has length n
+    (positive, summing to 1), and ``reproduced`` says what the weighted points reproduce
+    exactly: 2 (the second moment ``E[x xᵀ]``) or 4 (the second and every fourth moment).
+
+    * ``scheme="moments"``: ``2d² − 4d + 3`` points (3, 9, 19 for d = 2, 3, 4) reproducing every
+      second and fourth moment (``reproduced == 4``); where no positive point set of that shape
+      exists (d ≥ 4, two axes much sharper than a third, broad one) the ``2d − 1`` points of
+      ``"tac2016"`` with ``lam = 0.5`` instead (``reproduced == 2``). ``lam`` is ignored.
+    * ``scheme="tac2016"``: the ``2d − 1`` points of Gilitschenski et al. (IEEE TAC 2016) with
+      the weighting parameter ``lam`` in ``[0, 1]`` (the mode gets the weight ``lam · ω_mode``,
+      ω_mode = E[(mode·x)²]; libDirectional's default is 0.5); they reproduce the second
+      moment (``reproduced == 2``).
+    """
+    d, m, z = _dist(m, z)
+    try:
+        code = _SCHEMES[scheme]
+    except KeyError:
+        raise ValueError(f"scheme must be one of {sorted(_SCHEMES)}, got {scheme!r}") from None
+    cap = _SIZE(0)
+    _check(lib().bingham_deterministic_sample_count(d, code, ctypes.byref(cap)))
+    points = np.empty((cap.value, d))
+    weights = np.empty(cap.value)
+    n = _SIZE(0)
+    reproduced = ctypes.c_int(0)
+    _check(
+        lib().bingham_deterministic_samples(
+            d, _ptr(m), _ptr(z), code, float(lam), cap.value, _ptr(points), _ptr(weights),
+            ctypes.byref(n), ctypes.byref(reproduced),
+        )
+    )
+    return points[: n.value].copy(), weights[: n.value].copy(), int(reproduced.value)
+
+
+class _Callback:
+    """Runs a Python callable for the library without letting an exception cross into C.
+
+    The first exception raised by the callable (or by checking its result) is stored and the
+    callback returns 1 (failure); the library then stops and returns ``BINGHAM_ERR_CALLBACK``
+    with the filter unchanged, and :meth:`check` raises :class:`BinghamError` from the stored
+    exception (``KeyboardInterrupt`` and other non-``Exception`` exceptions are re-raised as
+    they are).
+    """
+
+    def __init__(self) -> None:
+        self.error: Optional[BaseException] = None
+
+    def run(self, body: Callable[[], None]) -> int:
+        if self.error is not None:  # the library stops at the first failure; be safe anyway
+            return 1
+        try:
+            body()
+        except BaseException as e:  # nothing may unwind into C
+            self.error = e
+            return 1
+        return 0
+
+    def check(self, status: int) -> None:
+        err = self.error
+        if err is not None and not isinstance(err, Exception):
+            raise err
+        if status != Status.OK:
+            exc = BinghamError(status, last_error_message())
+            if err is not None:
+                raise exc from err
+            raise exc
+
+
 class Filter:
     """The recursive Bingham filter (d = 2: axes as ``(re, im)``; d = 4: unit quaternions,
     scalar first), owning a ``bingham_filter`` handle.
 
     System ``x[k+1] = x[k] ⊕ w[k]``, measurement ``z[k] = x[k] ⊕ v[k]`` with Bingham noises
-    given as ``(m, z)`` pairs. A failed call raises :class:`BinghamError` and leaves the filter
-    unchanged. Use one filter per thread at a time; :meth:`clone` gives an independent copy.
+    given as ``(m, z)`` pairs; nonlinear models ``x[k+1] = a(x[k]) ⊕ w[k]`` and any likelihood
+    through Python callables (:meth:`predict_nonlinear`, :meth:`update_nonlinear`). A failed
+    call raises :class:`BinghamError` and leaves the filter unchanged. Use one filter per
+    thread at a time; :meth:`clone` gives an independent copy.
     The handle is released by :meth:`close`, by leaving a ``with`` block, or when the object
     is garbage collected.
     """
@@ -525,22 +620,28 @@ class Filter:
         handle = ctypes.c_void_p()
         _check(lib().bingham_filter_new(d, _ptr(m0), _ptr(z0), ctypes.byref(handle)))
         self._handle: Optional[ctypes.c_void_p] = handle
+        self._busy = False
         self.d = d
 
     @classmethod
     def _adopt(cls, handle: ctypes.c_void_p, d: int) -> "Filter":
         f = cls.__new__(cls)
         f._handle = handle
+        f._busy = False
         f.d = d
         return f
 
     def _h(self) -> ctypes.c_void_p:
         if self._handle is None:
             raise ValueError("the filter has been closed")
+        if self._busy:
+            raise ValueError("the filter is in a nonlinear step: its callback must not use it")
         return self._handle
 
     def close(self) -> None:
         """Releases the handle (idempotent)."""
+        if getattr(self, "_busy", False):
+            raise ValueError("the filter is in a nonlinear step: its callback must not close it")
         if getattr(self, "_handle", None) is not None:
             lib().bingham_filter_free(self._handle)
             self._handle = None
@@ -601,6 +702,78 @@ class Filter:
         u = _in(u, "u", (self.d,))
         m_w, z_w = self._noise(m_w, z_w, ("m_w", "z_w"))
         _check(lib().bingham_filter_predict_rotation(self._h(), _ptr(u), _ptr(m_w), _ptr(z_w)))
+
+    def predict_nonlinear(
+        self, fn: Callable[[Array], ArrayLike], m_w: ArrayLike, z_w: ArrayLike
+    ) -> None:
+        """Nonlinear prediction ``x[k+1] = fn(x[k]) ⊕ w[k]``, w ~ Bingham(m_w, z_w).
+
+        ``fn`` is called once per deterministic sample of the state (19 for d = 4, 3 for d = 2;
+        fewer where the scheme falls back, see :func:`deterministic_samples`) with a unit vector
+        ``x`` (a NumPy array of length d, a copy the callable may keep) and must return a unit
+        vector of length d (any array-like; unit within ``UNIT_TOL``, then normalized). Its sign
+        does not matter, and ``fn(-x) = ±fn(x)`` is the caller's contract (``q`` and ``-q`` are
+        the same rotation). The weighted second moment of the results is composed exactly with
+        the noise and refitted; with ``fn`` the identity this is :meth:`predict`.
+
+        ``fn`` must not use this filter (that raises ``ValueError`` inside it). If ``fn`` raises,
+        or returns a wrong shape or a non-finite or non-unit vector, the filter is unchanged and
+        :class:`BinghamError` with status ``ERR_CALLBACK`` is raised (``from`` the callable's
+        exception, if any: see ``__cause__``).
+        """
+        m_w, z_w = self._noise(m_w, z_w, ("m_w", "z_w"))
+        d = self.d
+        guard = _Callback()
+
+        def call(x_in: Any, x_out: Any) -> None:
+            x = np.ctypeslib.as_array(x_in, shape=(d,)).copy()
+            y = np.ascontiguousarray(fn(x), dtype=np.float64)
+            if y.shape != (d,):
+                raise ValueError(f"the transition must return shape ({d},), got {y.shape}")
+            ctypes.memmove(x_out, y.ctypes.data, d * ctypes.sizeof(ctypes.c_double))
+
+        cb = _TRANSITION_FN(lambda x_in, x_out, _user: guard.run(lambda: call(x_in, x_out)))
+        handle = self._h()
+        self._busy = True
+        try:
+            status = lib().bingham_filter_predict_nonlinear(handle, cb, None, _ptr(m_w), _ptr(z_w))
+        finally:
+            self._busy = False
+        guard.check(status)
+
+    def update_nonlinear(self, log_likelihood: Callable[[Array], float]) -> None:
+        """Nonlinear Bayes update: posterior ∝ prior(x) · L(x), ``log_likelihood(x)`` = log L(x).
+
+        ``log_likelihood`` gets a unit vector ``x`` (a NumPy array of length d, a copy) and
+        returns a finite float; ``L(-x) = L(x)`` is the caller's contract. The update is
+        progressive (tempered): a Bingham exponent is fitted to ``log L`` at the deterministic
+        samples of the current approximation (19 calls per round for d = 4, 5 for d = 2) and
+        multiplied in as ``exp(Δβ xᵀPx)``, with ``Δβ`` such that the part of ``log L`` the fit
+        misses contributes at most ``TEMPERING_RESIDUAL = 1`` per step (a Bingham likelihood is
+        absorbed exactly, in one step), then two importance-weighted moment matches correct the
+        result (at most 200 steps; beyond that ``ERR_NOT_CONVERGED``). Reliable where the
+        posterior is close to a Bingham distribution (one mode up to the sign); for a Bingham
+        likelihood :meth:`update` and :func:`multiply` are exact.
+
+        ``log_likelihood`` must not use this filter. If it raises or returns a non-finite value,
+        the filter is unchanged and :class:`BinghamError` with status ``ERR_CALLBACK`` is raised
+        (``from`` the callable's exception, if any).
+        """
+        d = self.d
+        guard = _Callback()
+
+        def call(x_in: Any, log_l: Any) -> None:
+            x = np.ctypeslib.as_array(x_in, shape=(d,)).copy()
+            log_l[0] = float(log_likelihood(x))
+
+        cb = _LOG_LIKELIHOOD_FN(lambda x_in, log_l, _user: guard.run(lambda: call(x_in, log_l)))
+        handle = self._h()
+        self._busy = True
+        try:
+            status = lib().bingham_filter_update_nonlinear(handle, cb, None)
+        finally:
+            self._busy = False
+        guard.check(status)
 
     def update(self, measurement: ArrayLike, m_v: ArrayLike, z_v: ArrayLike) -> None:
         """Measurement update with ``measurement = x ⊕ v``, v ~ Bingham(m_v, z_v)."""

@@ -6,7 +6,9 @@
 //! - [`guard`]: the panic guard every export runs in, pointer/length checks, copying in and out,
 //!   and the thread-local last error message (`bingham_last_error_message`).
 //! - [`math`]: the distribution functions (`bingham_normalization_constant`, `bingham_mle`, …).
-//! - [`filter`]: the recursive filter handle `bingham_filter`.
+//! - [`deterministic`]: deterministic samples of a distribution (`bingham_deterministic_samples`).
+//! - [`filter`]: the recursive filter handle `bingham_filter` (including the nonlinear predict
+//!   and update through C callbacks).
 //! - [`ahrs`]: the IMU orientation filter handle `bingham_ahrs`.
 //!
 //! Conventions (see the header's preamble): row-major `double` arrays, `z` in any order and
@@ -27,11 +29,14 @@ pub mod guard;
 
 pub mod math;
 
+pub mod deterministic;
+
 pub mod filter;
 
 pub mod ahrs;
 
 pub use ahrs::*;
+pub use deterministic::*;
 pub use filter::*;
 pub use guard::bingham_last_error_message;
 pub use math::*;
