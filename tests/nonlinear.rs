@@ -425,15 +425,25 @@ fn top_eigenvector(s: &DMatrix<f64>) -> Vec<f64> {
     e.eigenvectors.column(k).iter().copied().collect()
 }
 
-/// Monte Carlo posterior: `n` prior samples weighted by the likelihood; the mode (the top
-/// eigenvector of the weighted second moment) and its standard error (20 batches: the rotation
-/// angle of each batch's mode from the full one, root-mean-square over `√(B − 1)`).
+/// A Monte Carlo posterior: its mode (the top eigenvector of the weighted second moment) with
+/// the mode's standard error (20 batches: the rotation angle of each batch's mode from the full
+/// one, root-mean-square over `√(B − 1)`), the second moment with its standard error
+/// (Frobenius norm of the entries' batch standard errors), and the effective sample size.
+struct Posterior {
+    mode: Vec<f64>,
+    se: f64,
+    moment: DMatrix<f64>,
+    moment_se: f64,
+    ess: f64,
+}
+
+/// Monte Carlo posterior from `n` prior samples weighted by the likelihood.
 fn monte_carlo_posterior(
     prior: &Bingham,
     log_l: &dyn Fn(&[f64]) -> f64,
     n: usize,
     seed: u64,
-) -> (Vec<f64>, f64, f64) {
+) -> Posterior {
     monte_carlo_posterior_from(prior, prior, log_l, n, seed)
 }
 
@@ -446,22 +456,27 @@ fn monte_carlo_posterior_from(
     log_l: &dyn Fn(&[f64]) -> f64,
     n: usize,
     seed: u64,
-) -> (Vec<f64>, f64, f64) {
+) -> Posterior {
     let log_w = |x: &[f64]| log_l(x) + prior.log_pdf(x).unwrap() - proposal.log_pdf(x).unwrap();
     let mut rng = StdRng::seed_from_u64(seed);
     const BATCHES: usize = 20;
     let per = n / BATCHES;
-    let mut batch = Vec::new();
+    let mut batch_modes = Vec::new();
+    let mut batch_moments = Vec::new();
     let mut all: Vec<(DVector<f64>, f64)> = Vec::with_capacity(n);
     for _ in 0..BATCHES {
         let xs = proposal.sample(&mut rng, per);
         let ls: Vec<f64> = xs.iter().map(|x| log_w(x.as_slice())).collect();
         let hi = ls.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
         let mut s = DMatrix::zeros(4, 4);
+        let mut sw = 0.0;
         for (x, &l) in xs.iter().zip(&ls) {
-            outer_add(&mut s, x.as_slice(), (l - hi).exp());
+            let w = (l - hi).exp();
+            outer_add(&mut s, x.as_slice(), w);
+            sw += w;
         }
-        batch.push(top_eigenvector(&s));
+        batch_modes.push(top_eigenvector(&s));
+        batch_moments.push(s / sw);
         all.extend(xs.into_iter().zip(ls));
     }
     let hi = all.iter().fold(f64::NEG_INFINITY, |a, b| a.max(b.1));
@@ -473,10 +488,28 @@ fn monte_carlo_posterior_from(
         sw += w;
         sw2 += w * w;
     }
-    let mode = top_eigenvector(&s);
-    let ms: f64 = batch.iter().map(|b| angle(b, &mode).powi(2)).sum::<f64>() / BATCHES as f64;
-    let se = (ms / (BATCHES - 1) as f64).sqrt();
-    (mode, se, sw * sw / sw2)
+    let moment = s / sw;
+    let mode = top_eigenvector(&moment);
+    let ms: f64 = batch_modes
+        .iter()
+        .map(|b| angle(b, &mode).powi(2))
+        .sum::<f64>()
+        / BATCHES as f64;
+    let mean = batch_moments
+        .iter()
+        .fold(DMatrix::zeros(4, 4), |a, b| a + b)
+        / BATCHES as f64;
+    let var = batch_moments
+        .iter()
+        .fold(DMatrix::zeros(4, 4), |a, b| a + (b - &mean).map(|v| v * v))
+        / ((BATCHES - 1) * BATCHES) as f64;
+    Posterior {
+        mode,
+        se: (ms / (BATCHES - 1) as f64).sqrt(),
+        moment,
+        moment_se: var.map(f64::sqrt).norm(),
+        ess: sw * sw / sw2,
+    }
 }
 
 #[test]
@@ -533,40 +566,62 @@ fn camera_case(z: &[f64], within_se: Option<f64>) {
         })
         .unwrap();
         let ours: Vec<f64> = f.mode().to_vec();
-        // TAC 2016 in one step: reweight its points by L and refit.
-        let tac = {
+        // TAC 2016 in one step: reweight its points by L (its moment and mode).
+        let tac_moment = {
             let s = prior
                 .deterministic_samples(Scheme::Tac2016 { lambda: 0.5 })
                 .unwrap();
             let ls: Vec<f64> = s.points.chunks(4).map(log_l).collect();
             let hi = ls.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
             let mut c = DMatrix::zeros(4, 4);
+            let mut sw = 0.0;
             for ((x, &wk), &l) in s.points.chunks(4).zip(&s.weights).zip(&ls) {
                 outer_add(&mut c, x, wk * (l - hi).exp());
+                sw += wk * (l - hi).exp();
             }
-            top_eigenvector(&c)
+            c / sw
         };
-        let (mc, se, ess) = monte_carlo_posterior(&prior, &log_l, 1_000_000, 700 + k as u64);
+        let tac = top_eigenvector(&tac_moment);
+        let ours_moment = f.state().second_moment().unwrap();
+        let mc = monte_carlo_posterior(&prior, &log_l, 1_000_000, 700 + k as u64);
         let wide = {
             let st = f.state();
             let zz: Vec<f64> = st.z().iter().map(|v| v * 0.25).collect();
             Bingham::from_row_major(4, &st.m_row_major(), &zz).unwrap()
         };
-        let (mc2, se2, ess2) =
-            monte_carlo_posterior_from(&prior, &wide, &log_l, 1_000_000, 800 + k as u64);
-        let (e_ours, e_tac, e_is) = (angle(&ours, &mc), angle(&tac, &mc), angle(&ours, &mc2));
+        let is = monte_carlo_posterior_from(&prior, &wide, &log_l, 1_000_000, 800 + k as u64);
+        let (e_ours, e_tac, e_is) = (
+            angle(&ours, &mc.mode),
+            angle(&tac, &mc.mode),
+            angle(&ours, &is.mode),
+        );
+        let (s_ours, s_tac) = (
+            frob(&ours_moment, &is.moment),
+            frob(&tac_moment, &is.moment),
+        );
         println!(
             "camera update, prior z {z:?}, likelihood spread {ratio} x prior ({sigma:.3} rad), \
              {calls} likelihood calls; posterior mode vs the prior-sampled reference: ours \
-             {e_ours:.2e} rad, TAC 2016 one step {e_tac:.2e} rad, standard error {se:.2e} \
-             (ESS {ess:.0}); vs the importance-sampled reference: ours {e_is:.2e} rad, standard \
-             error {se2:.2e} (ESS {ess2:.0})"
+             {e_ours:.2e} rad, TAC 2016 one step {e_tac:.2e} rad, standard error {:.2e} \
+             (ESS {:.0}); vs the importance-sampled reference: ours {e_is:.2e} rad, standard \
+             error {:.2e} (ESS {:.0}); second moment vs it: ours {s_ours:.2e}, TAC 2016 \
+             {s_tac:.2e}, standard error {:.2e}",
+            mc.se, mc.ess, is.se, is.ess, is.moment_se
         );
         if let Some(k) = within_se {
-            assert!(e_ours <= k * se, "{e_ours:e} > {k} x {se:e}");
-            assert!(e_is <= k * se2, "{e_is:e} > {k} x {se2:e}");
+            assert!(e_ours <= k * mc.se, "{e_ours:e} > {k} x {:e}", mc.se);
+            assert!(e_is <= k * is.se, "{e_is:e} > {k} x {:e}", is.se);
+            assert!(
+                s_ours <= k * is.moment_se,
+                "{s_ours:e} > {k} x {:e}",
+                is.moment_se
+            );
         }
         assert!(e_ours * 10.0 <= e_tac, "ours {e_ours:e}, TAC {e_tac:e}");
+        assert!(
+            s_ours * 10.0 <= s_tac,
+            "moment: ours {s_ours:e}, TAC {s_tac:e}"
+        );
     }
 }
 
@@ -600,8 +655,8 @@ fn bingham_likelihood_update_is_the_exact_product() {
             .map(|i| common::rel(ours.z()[i], exact.z()[i], 1e-300))
             .fold(0.0, f64::max);
         let mode_err = angle(ours.mode().as_slice(), exact.mode().as_slice());
-        let (mc, se, _) = monte_carlo_posterior(&prior, &log_l, 200_000, 900 + k as u64);
-        let mc_err = angle(&mc, exact.mode().as_slice());
+        let mc = monte_carlo_posterior(&prior, &log_l, 200_000, 900 + k as u64);
+        let (mc_err, se) = (angle(&mc.mode, exact.mode().as_slice()), mc.se);
         println!(
             "Bingham likelihood x{scale}: z relative {zerr:.1e}, mode {mode_err:.1e} rad \
              ({calls} calls); Monte Carlo mode {mc_err:.1e} rad (standard error {se:.1e})"
