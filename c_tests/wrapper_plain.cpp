@@ -17,6 +17,7 @@
 #include "bingham.hpp"
 
 #include <cmath>
+#include <stdexcept>
 #include <cstring>
 #include <string>
 #include <utility>
@@ -323,6 +324,77 @@ static void test_filter() {
     bingham_filter_free(c);
 }
 
+// The nonlinear steps with C++ callables: bit-identical to the C functions with C callbacks; an
+// exception thrown by the callable is rethrown with the filter unchanged; a non-finite value
+// throws Error(BINGHAM_ERR_CALLBACK), filter unchanged.
+static int c_turn(const double *x, double *out, void *) {
+    const double c = std::cos(0.05), s = std::sin(0.05);
+    out[0] = x[0] * c - x[3] * s;
+    out[1] = x[1] * c + x[2] * s;
+    out[2] = x[2] * c - x[1] * s;
+    out[3] = x[3] * c + x[0] * s;
+    return 0;
+}
+
+static double quartic(const double *x) {
+    const double e = 1.0 - x[1] * x[1];
+    return -20.0 * (1.0 - e) * (1.0 - e) - 3.0 * x[2] * x[2];
+}
+
+static int c_quartic(const double *x, double *log_l, void *) {
+    *log_l = quartic(x);
+    return 0;
+}
+
+static void test_filter_nonlinear() {
+    using bingham::Distribution;
+    const Distribution init({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}, {-30, -20, -10, 0});
+    const Distribution w = bingham::noise_from_angle_std_deg(4, 3.0);
+    bingham::Filter f(init);
+    bingham_filter *c = nullptr;
+    CHECK_OK(bingham_filter_new(4, init.M.data(), init.z.data(), &c));
+    int calls = 0;
+    for (int k = 0; k < 3; ++k) {
+        f.predict_nonlinear(
+            [&](const double *x, double *out) {
+                ++calls;
+                c_turn(x, out, nullptr);
+            },
+            w);
+        f.update_nonlinear([](const double *x) { return quartic(x); });
+        CHECK_OK(bingham_filter_predict_nonlinear(c, c_turn, nullptr, w.M.data(), w.z.data()));
+        CHECK_OK(bingham_filter_update_nonlinear(c, c_quartic, nullptr));
+    }
+    CHECK(calls == 3 * 19);
+    Distribution sc(std::vector<double>(16), std::vector<double>(4));
+    CHECK_OK(bingham_filter_get_state(c, sc.M.data(), sc.z.data()));
+    CHECK(same(f.state(), sc));
+
+    const Distribution before = f.state();
+    bool rethrown = false;
+    try {
+        f.update_nonlinear([](const double *) -> double { throw std::runtime_error("sensor model failed"); });
+    } catch (const std::runtime_error &e) {
+        rethrown = std::strcmp(e.what(), "sensor model failed") == 0;
+    }
+    CHECK(rethrown && same(f.state(), before));
+    rethrown = false;
+    try {
+        f.predict_nonlinear([](const double *, double *) { throw std::runtime_error("dynamics failed"); }, w);
+    } catch (const std::runtime_error &e) {
+        rethrown = std::strcmp(e.what(), "dynamics failed") == 0;
+    }
+    CHECK(rethrown && same(f.state(), before));
+    bool callback_error = false;
+    try {
+        f.update_nonlinear([](const double *) { return std::nan(""); });
+    } catch (const bingham::Error &e) {
+        callback_error = e.status() == BINGHAM_ERR_CALLBACK;
+    }
+    CHECK(callback_error && same(f.state(), before));
+    bingham_filter_free(c);
+}
+
 static void test_ahrs() {
     const double dt = 0.01;
     bingham::Ahrs a(dt);
@@ -418,6 +490,7 @@ int main() {
     try {
         test_free_functions();
         test_filter();
+        test_filter_nonlinear();
         test_ahrs();
     } catch (const std::exception &e) {
         std::fprintf(stderr, "unexpected exception: %s\n", e.what());

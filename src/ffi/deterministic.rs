@@ -83,8 +83,8 @@ pub unsafe extern "C" fn bingham_deterministic_sample_count(
 /// The points are built in the principal coordinates `y = Mᵀ x` and mapped back by `x = M y`:
 /// the mode first, then points around it along the other principal directions (pairs
 /// `(mode ± t_i m_i)/‖·‖`) and, for `BINGHAM_SAMPLES_MOMENTS`, along pairs of them (quadruples
-/// `(mode ± t_i m_i ± t_j m_j)/‖·‖`; for some flat distributions in d ≥ 4 the broadest
-/// non-mode direction gets two further centers instead). Every point lies in the mode's
+/// `(mode ± t_i m_i ± t_j m_j)/‖·‖`; for a "girdle" — two directions much sharper than a
+/// third, broad one — the broad direction gets two further centers, with pairs around each). Every point lies in the mode's
 /// hemisphere (`−x` is the same point of a Bingham distribution).
 ///
 /// - `d`: 2..64. Checked before any array is read.
@@ -95,7 +95,8 @@ pub unsafe extern "C" fn bingham_deterministic_sample_count(
 ///   `BINGHAM_SAMPLES_MOMENTS` (exact second and fourth moments, `2d² - 4d + 3` points, or the
 ///   TAC 2016 points where that set does not exist); see the constants.
 /// - `lambda`: the TAC 2016 weighting parameter, in [0, 1] (0.5 is libDirectional's
-///   default; 1 puts the least weight on the mode). Ignored by `BINGHAM_SAMPLES_MOMENTS`.
+///   default): the mode's weight is `lambda * ω_mode` (0: no point at the mode; 1: the pairs
+///   lie on the principal axes themselves). Ignored by `BINGHAM_SAMPLES_MOMENTS`.
 /// - `capacity`: the number of points `points` and `weights` can hold; must be at least
 ///   `bingham_deterministic_sample_count(d, scheme)` (the largest count the scheme may return,
 ///   even where it returns fewer).
