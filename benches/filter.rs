@@ -52,8 +52,9 @@ fn bench_step(c: &mut Criterion, name: &str, sc: &Scenario) {
 }
 
 /// The prediction alone: linear, and nonlinear with a trivial (identity) transition and with a
-/// rotation (issue 12 target: nonlinear d = 4 with a trivial callback ≤ 2 × linear). Each
-/// iteration predicts from the same warmed-up state (a clone made outside the timing).
+/// rotation (issue 12 target: nonlinear d = 4 with a trivial callback ≤ 2 × linear); and the
+/// nonlinear update. Each iteration starts from the same warmed-up state (a clone made outside
+/// the timing).
 fn bench_predict(c: &mut Criterion, name: &str, sc: &Scenario) {
     let meas = measurements(sc);
     let mut f = BinghamFilter::new(sc.d, &sc.m0, &sc.z0).unwrap();
@@ -120,6 +121,31 @@ fn bench_predict(c: &mut Criterion, name: &str, sc: &Scenario) {
             BatchSize::SmallInput,
         )
     });
+    // The nonlinear update with the measurement's likelihood written out: log L(x) =
+    // -κ (1 - <x, y>²), Bingham-form (one step and two corrections: 57 calls for d = 4), and its
+    // square added (not log-quadratic: a few tempering steps).
+    let y = meas[51].clone();
+    for (label, quartic) in [("bingham likelihood", false), ("quartic likelihood", true)] {
+        g.bench_function(format!("{name} update_nonlinear {label}"), |b| {
+            b.iter_batched(
+                || f.clone(),
+                |mut h| {
+                    h.update_nonlinear(|x| {
+                        let dot: f64 = x.iter().zip(&y).map(|(a, b)| a * b).sum();
+                        let e = 1.0 - dot * dot;
+                        Ok(if quartic {
+                            -50.0 * e - 500.0 * e * e
+                        } else {
+                            -50.0 * e
+                        })
+                    })
+                    .unwrap();
+                    h
+                },
+                BatchSize::SmallInput,
+            )
+        });
+    }
     g.finish();
 }
 
