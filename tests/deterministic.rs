@@ -7,6 +7,8 @@ use bingham::normalization::evaluate;
 use bingham::{Bingham, Method};
 
 mod common;
+#[path = "filter_common/mod.rs"]
+mod filter_common;
 
 /// A random orthogonal matrix (Gram-Schmidt of a deterministic pseudo-random matrix).
 fn orthogonal(d: usize, seed: u64) -> Vec<f64> {
@@ -215,4 +217,32 @@ fn moments_scheme_coverage_over_random_z() {
             assert!(share < 0.06, "{share}");
         }
     }
+}
+
+/// Every predicted and updated state of 5 runs of the JAIF d = 4 scenario (the predictions are
+/// girdles, z ≈ (−150, −150, −2, 0)) gets a fourth-moment set.
+#[test]
+fn jaif_states_get_fourth_moment_sets() {
+    use bingham::filter::BinghamFilter;
+    let sc = filter_common::scenario_4d();
+    let (mut fallback, mut total) = (0, 0);
+    let mut check = |f: &BinghamFilter| {
+        let s = f.state().deterministic_samples(Scheme::Moments).unwrap();
+        if s.reproduced != Reproduced::FourthMoments {
+            fallback += 1;
+        }
+        total += 1;
+    };
+    for run in 0..5 {
+        let meas = filter_common::simulate(&sc, run).1;
+        let mut f = BinghamFilter::new(4, &sc.m0, &sc.z0).unwrap();
+        for y in &meas {
+            f.predict(&sc.mw, &sc.zw).unwrap();
+            check(&f);
+            f.update(y, &sc.mv, &sc.zv).unwrap();
+            check(&f);
+        }
+    }
+    println!("JAIF d = 4 states: {fallback} of {total} need the fallback");
+    assert_eq!(fallback, 0);
 }
