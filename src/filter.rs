@@ -49,7 +49,7 @@ use crate::deterministic::{for_each_point, for_each_probe, plan, Scheme};
 use crate::distribution::{bayes_product, log_f_omega, product_eigen_precision, Bingham};
 use crate::error::{Error, Result};
 use crate::matrix::{congruence, write_row_major};
-use crate::mle::{fit_second_moment, Derivs};
+use crate::mle::{cholesky_solve, fit_second_moment, Derivs};
 use crate::params::{params_row_major, unit, UNIT_TOL};
 use crate::quaternion::{compose_moments, left, right};
 
@@ -109,8 +109,8 @@ impl<const D: usize> Samples<D> {
         }
     }
 
-    /// The largest weighted-free residual `|l_k − c − x_kᵀ P x_k|` over the samples, with `c`
-    /// the weighted mean offset (the fit's constant).
+    /// The largest residual `|l_k − c − x_kᵀ P x_k|` over the samples (fit-only points
+    /// included), `c` the weighted mean offset (the fit's constant).
     #[allow(clippy::needless_range_loop)] // parallel arrays
     fn misfit(&self, p: &Mat<D>) -> f64 {
         // Relative to the largest log-likelihood, as in the fit (a huge constant cancels).
@@ -182,7 +182,10 @@ impl<const D: usize> Samples<D> {
         for r in 0..nu {
             a[r * nu + r] += 1e-12 * tr / nu as f64;
         }
-        cholesky_solve(&mut a[..nu * nu], &mut b[..nu], nu);
+        if !cholesky_solve(nu, &mut a[..nu * nu], &mut b[..nu]) {
+            // Not numerically definite even with the ridge (no usable samples): no exponent.
+            b.fill(0.0);
+        }
         let mut py = Mat::<D>::zeros();
         let mut u = 0;
         for i in 0..D {
@@ -194,40 +197,6 @@ impl<const D: usize> Samples<D> {
             }
         }
         m * py * m.transpose()
-    }
-}
-
-/// Solves `A x = b` in place (`A` symmetric positive definite, n×n row-major; `b` becomes `x`).
-#[allow(clippy::needless_range_loop)]
-fn cholesky_solve(a: &mut [f64], b: &mut [f64], n: usize) {
-    for j in 0..n {
-        let mut d = a[j * n + j];
-        for k in 0..j {
-            d -= a[j * n + k] * a[j * n + k];
-        }
-        let d = d.max(f64::MIN_POSITIVE).sqrt();
-        a[j * n + j] = d;
-        for i in j + 1..n {
-            let mut v = a[i * n + j];
-            for k in 0..j {
-                v -= a[i * n + k] * a[j * n + k];
-            }
-            a[i * n + j] = v / d;
-        }
-    }
-    for i in 0..n {
-        let mut v = b[i];
-        for k in 0..i {
-            v -= a[i * n + k] * b[k];
-        }
-        b[i] = v / a[i * n + i];
-    }
-    for i in (0..n).rev() {
-        let mut v = b[i];
-        for k in i + 1..n {
-            v -= a[k * n + i] * b[k];
-        }
-        b[i] = v / a[i * n + i];
     }
 }
 

@@ -238,7 +238,7 @@ impl Scratch {
 
 /// Solves `A x = b` in place (`a` k×k row-major symmetric positive definite, destroyed;
 /// `b` overwritten by `x`) by Cholesky; `false` if `A` is not numerically positive definite.
-fn cholesky_solve(k: usize, a: &mut [f64], b: &mut [f64]) -> bool {
+pub(crate) fn cholesky_solve(k: usize, a: &mut [f64], b: &mut [f64]) -> bool {
     for j in 0..k {
         let mut s = a[j * k + j];
         for p in 0..j {

@@ -10,34 +10,10 @@ mod common;
 #[path = "filter_common/mod.rs"]
 mod filter_common;
 
-/// A random orthogonal matrix (Gram-Schmidt of a deterministic pseudo-random matrix).
+/// A Haar-random orthogonal matrix (row-major) from the shared test generator.
 fn orthogonal(d: usize, seed: u64) -> Vec<f64> {
-    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-    let mut next = || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
-    let mut cols: Vec<Vec<f64>> = Vec::new();
-    for _ in 0..d {
-        let mut v: Vec<f64> = (0..d).map(|_| next()).collect();
-        for c in &cols {
-            let p: f64 = v.iter().zip(c).map(|(a, b)| a * b).sum();
-            for (a, b) in v.iter_mut().zip(c) {
-                *a -= p * b;
-            }
-        }
-        let n = v.iter().map(|a| a * a).sum::<f64>().sqrt();
-        cols.push(v.iter().map(|a| a / n).collect());
-    }
-    let mut m = vec![0.0; d * d];
-    for r in 0..d {
-        for c in 0..d {
-            m[r * d + c] = cols[c][r];
-        }
-    }
-    m
+    let q = common::Rng64(seed).orthogonal(d);
+    (0..d * d).map(|k| q[(k / d, k % d)]).collect()
 }
 
 /// Max relative errors of the second moment and of the principal fourth moments
