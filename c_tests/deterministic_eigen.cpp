@@ -31,55 +31,16 @@
 #include <vector>
 
 #include "check.h"
+#include "eigen_util.hpp"
 #include "sphere_quadrature.hpp"
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
-typedef Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> RowMatrix;
+using namespace eigen_util;
 
 // ---- helpers ---------------------------------------------------------------------------------
 
 static std::mt19937_64 rng(777);
-
-static MatrixXd random_orthogonal(int d) {
-    std::normal_distribution<double> g;
-    MatrixXd a(d, d);
-    for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) a(i, j) = g(rng);
-    Eigen::HouseholderQR<MatrixXd> qr(a);
-    return qr.householderQ() * MatrixXd::Identity(d, d);
-}
-
-static VectorXd random_unit(int d) {
-    std::normal_distribution<double> g;
-    VectorXd v(d);
-    for (int i = 0; i < d; ++i) v(i) = g(rng);
-    return v.normalized();
-}
-
-static std::vector<double> row_major(const MatrixXd &m) {
-    RowMatrix r = m;
-    return std::vector<double>(r.data(), r.data() + r.size());
-}
-
-static MatrixXd from_row_major(const std::vector<double> &v, int d) {
-    MatrixXd m(d, d);
-    for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) m(i, j) = v[i * d + j];
-    return m;
-}
-
-static VectorXd compose_vectors(const VectorXd &x, const VectorXd &y) {
-    VectorXd r(x.size());
-    if (x.size() == 2) {
-        std::complex<double> p = std::complex<double>(x(0), x(1)) * std::complex<double>(y(0), y(1));
-        r << p.real(), p.imag();
-    } else {
-        Eigen::Quaterniond p = Eigen::Quaterniond(x(0), x(1), x(2), x(3)) * Eigen::Quaterniond(y(0), y(1), y(2), y(3));
-        r << p.w(), p.x(), p.y(), p.z();
-    }
-    return r;
-}
 
 static double max_count(int d, int scheme) {
     return scheme == BINGHAM_SAMPLES_TAC2016 ? 2 * d - 1 : 2 * d * d - 4 * d + 3;
@@ -217,7 +178,7 @@ static const double Z4[][4] = {{-1e-3, -2e-3, -5e-4, 0}, {-3, -2, -1, 0},     {0
 
 static void test_samples_case(const double *zc, int d) {
     for (int rep = 0; rep < 3; ++rep) {
-        MatrixXd m = random_orthogonal(d);
+        MatrixXd m = random_orthogonal(rng, d);
         VectorXd z = Eigen::Map<const VectorXd>(zc, d);
         if (rep == 2) z.array() += 3.5;  // any shift
         Samples mo = samples(m, z, BINGHAM_SAMPLES_MOMENTS, std::numeric_limits<double>::quiet_NaN());
@@ -243,7 +204,7 @@ static void test_samples() {
     // the documented fallback (the example of the scheme's documentation: a very broad axis
     // next to a moderately sharp one in d = 4): no positive moment-matched set; the TAC 2016
     // points (lambda = 1/2) are returned and say so
-    MatrixXd m = random_orthogonal(4);
+    MatrixXd m = random_orthogonal(rng, 4);
     VectorXd z(4);
     z << -25.6, -6.8, -0.017, 0;
     Samples s = samples(m, z, BINGHAM_SAMPLES_MOMENTS, 0.5);
@@ -366,7 +327,7 @@ static double z_rel(const VectorXd &a, const VectorXd &b) {
 
 static void test_predict_identity_and_rotation(int d) {
     for (int rep = 0; rep < 5; ++rep) {
-        MatrixXd m = random_orthogonal(d), mw = random_orthogonal(d);
+        MatrixXd m = random_orthogonal(rng, d), mw = random_orthogonal(rng, d);
         VectorXd z(d), zw(d);
         std::uniform_real_distribution<double> lz(-3, 2);
         for (int i = 0; i < d; ++i) {
@@ -398,7 +359,7 @@ static void test_predict_identity_and_rotation(int d) {
         a = make_filter(m, z);
         b = make_filter(m, z);
         c = make_ctx(d, T_ROTATE, -1);
-        c.u = random_unit(d);
+        c.u = random_unit(rng, d);
         CHECK_OK(bingham_filter_predict_nonlinear(a, transition_cb, &c, mwr.data(), zw.data()));
         CHECK_OK(bingham_filter_predict_rotation(b, c.u.data(), mwr.data(), zw.data()));
         CHECK(c.calls == expect_calls);
@@ -417,7 +378,7 @@ static void test_predict_identity_and_rotation(int d) {
 // Every failure: BINGHAM_ERR_CALLBACK, the state bit-identical, the message; afterwards the filter
 // behaves exactly as a clone taken before (hidden state untouched).
 static void test_failing_callbacks(int d) {
-    MatrixXd m = random_orthogonal(d), mw = random_orthogonal(d);
+    MatrixXd m = random_orthogonal(rng, d), mw = random_orthogonal(rng, d);
     VectorXd z(d), zw(d);
     for (int i = 0; i < d; ++i) {
         z(i) = -5.0 * (d - i);
@@ -451,7 +412,7 @@ static void test_failing_callbacks(int d) {
 
     // the likelihood: a sharp one (several iterations); the number of calls of a successful
     // update (on a clone) tells where the first, a middle and the last call are
-    MatrixXd ml = random_orthogonal(d);
+    MatrixXd ml = random_orthogonal(rng, d);
     VectorXd zl = VectorXd::Constant(d, -400);
     zl(d - 1) = 0;
     int total = 0;
@@ -513,7 +474,7 @@ static void test_update_against_product(int d) {
     for (int si = 0; si < 3; ++si) {
         double worst_mode = 0, worst_z = 0;
         for (int rep = 0; rep < 6; ++rep) {
-            MatrixXd m = random_orthogonal(d), ml = random_orthogonal(d);
+            MatrixXd m = random_orthogonal(rng, d), ml = random_orthogonal(rng, d);
             VectorXd z(d), zl(d);
             std::uniform_real_distribution<double> u(5, 40);
             for (int i = 0; i < d; ++i) {
@@ -574,14 +535,14 @@ static void test_update_non_bingham(int d) {
     for (double kappa : kappas) {
         double worst = 0, worst_mode = 0;
         for (int rep = 0; rep < 4; ++rep) {
-            MatrixXd m = random_orthogonal(d);
+            MatrixXd m = random_orthogonal(rng, d);
             VectorXd z(d);
             std::uniform_real_distribution<double> u(2, 15);
             for (int i = 0; i < d; ++i) z(i) = -u(rng);
             z(d - 1) = 0;
             // v within about 0.4 rad of the prior's mode: a unimodal posterior (the documented
             // domain; a likelihood far from the prior's mode makes it bimodal)
-            VectorXd v = m.col(d - 1) + 0.4 * random_unit(d);
+            VectorXd v = m.col(d - 1) + 0.4 * random_unit(rng, d);
             Quartic q{v.normalized(), kappa, 0};
             // the reference: the posterior's second moment by quadrature
             MatrixXd A = m * z.asDiagonal() * m.transpose(), S = MatrixXd::Zero(d, d);

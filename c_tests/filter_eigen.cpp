@@ -28,11 +28,12 @@
 #include <vector>
 
 #include "check.h"
+#include "eigen_util.hpp"
 #include "sphere_quadrature.hpp"
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
-typedef Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> RowMatrix;
+using namespace eigen_util;
 
 static const std::vector<Node> &nodes(int d) {
     // 512 points on S^1; 80 x 80 x 160 on S^3
@@ -59,7 +60,6 @@ static void moments(const MatrixXd &A, double &log_f, MatrixXd &S) {
 }
 
 // E[(x (+) u)(x (+) u)^T] for x prop. to exp(x^T A x), by quadrature of the rotated points.
-static VectorXd compose_vectors(const VectorXd &x, const VectorXd &y);
 static MatrixXd rotated_moment(const MatrixXd &A, const VectorXd &u) {
     int d = (int)A.rows();
     double top = Eigen::SelfAdjointEigenSolver<MatrixXd>(A).eigenvalues().maxCoeff(), F = 0;
@@ -74,18 +74,6 @@ static MatrixXd rotated_moment(const MatrixXd &A, const VectorXd &u) {
 }
 
 // ---- algebra with std::complex / Eigen::Quaterniond --------------------------------------------
-
-static VectorXd compose_vectors(const VectorXd &x, const VectorXd &y) {
-    VectorXd r(x.size());
-    if (x.size() == 2) {
-        std::complex<double> p = std::complex<double>(x(0), x(1)) * std::complex<double>(y(0), y(1));
-        r << p.real(), p.imag();
-    } else {
-        Eigen::Quaterniond p = Eigen::Quaterniond(x(0), x(1), x(2), x(3)) * Eigen::Quaterniond(y(0), y(1), y(2), y(3));
-        r << p.w(), p.x(), p.y(), p.z();
-    }
-    return r;
-}
 
 static VectorXd conjugate(const VectorXd &x) {
     VectorXd r = -x;
@@ -116,36 +104,6 @@ static MatrixXd compose_moments(const MatrixXd &A, const MatrixXd &B) {
 
 static std::mt19937_64 rng(4242);
 
-static MatrixXd random_orthogonal(int d) {
-    std::normal_distribution<double> g;
-    MatrixXd a(d, d);
-    for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) a(i, j) = g(rng);
-    Eigen::HouseholderQR<MatrixXd> qr(a);
-    return qr.householderQ() * MatrixXd::Identity(d, d);
-}
-
-static VectorXd random_unit(int d) {
-    std::normal_distribution<double> g;
-    VectorXd v(d);
-    for (int i = 0; i < d; ++i) v(i) = g(rng);
-    return v.normalized();
-}
-
-static VectorXd random_z(int d, double lo, double hi) {
-    std::uniform_real_distribution<double> u(lo, hi);
-    VectorXd z(d);
-    for (int i = 0; i < d; ++i) z(i) = u(rng);
-    z(d - 1) = 0;
-    return z;
-}
-
-static std::vector<double> row_major(const MatrixXd &m) {
-    RowMatrix r = m;
-    return std::vector<double>(r.data(), r.data() + r.size());
-}
-
-static double max_abs(const MatrixXd &m) { return m.cwiseAbs().maxCoeff(); }
 
 struct State {
     MatrixXd m;
@@ -174,8 +132,8 @@ static bingham_filter *make_filter(const MatrixXd &m, const VectorXd &z) {
 
 static void test_predict(int d) {
     for (int rep = 0; rep < 4; ++rep) {
-        MatrixXd m = random_orthogonal(d), mw = random_orthogonal(d);
-        VectorXd z = random_z(d, -25, 0), zw = random_z(d, -25, 0);
+        MatrixXd m = random_orthogonal(rng, d), mw = random_orthogonal(rng, d);
+        VectorXd z = random_z(rng, d, -25, 0), zw = random_z(rng, d, -25, 0);
         bingham_filter *f = make_filter(m, z);
         double lf;
         MatrixXd A, B, S;
@@ -190,7 +148,7 @@ static void test_predict(int d) {
         if (!(max_abs(S - C) < 1e-10)) fprintf(stderr, "    predict d=%d: %.3g\n", d, max_abs(S - C));
 
         // with a known rotation u: x (+) u (+) w
-        VectorXd u = random_unit(d);
+        VectorXd u = random_unit(rng, d);
         bingham_filter_free(f);
         f = make_filter(m, z);
         CHECK_OK(bingham_filter_predict_rotation(f, u.data(), mwr.data(), zw.data()));
@@ -207,8 +165,8 @@ static void test_predict(int d) {
 // state and the noise, entry by entry within 5 standard errors of the predicted state's moment.
 static void test_predict_sampled(int d) {
     const size_t n = 200000;
-    MatrixXd m = random_orthogonal(d), mw = random_orthogonal(d);
-    VectorXd z = random_z(d, -10, 0), zw = random_z(d, -30, -5);
+    MatrixXd m = random_orthogonal(rng, d), mw = random_orthogonal(rng, d);
+    VectorXd z = random_z(rng, d, -10, 0), zw = random_z(rng, d, -30, -5);
     std::vector<double> mr = row_major(m), mwr = row_major(mw), xs(n * d), ws(n * d);
     CHECK_OK(bingham_sample(d, mr.data(), z.data(), 11, n, xs.data()));
     CHECK_OK(bingham_sample(d, mwr.data(), zw.data(), 12, n, ws.data()));
@@ -236,8 +194,8 @@ static void test_predict_sampled(int d) {
 
 static void test_update(int d) {
     for (int rep = 0; rep < 6; ++rep) {
-        MatrixXd m = random_orthogonal(d), mv = random_orthogonal(d);
-        VectorXd z = random_z(d, -25, 0), zv = random_z(d, -25, 0), y = random_unit(d);
+        MatrixXd m = random_orthogonal(rng, d), mv = random_orthogonal(rng, d);
+        VectorXd z = random_z(rng, d, -25, 0), zv = random_z(rng, d, -25, 0), y = random_unit(rng, d);
         bingham_filter *f = make_filter(m, z);
         std::vector<double> mvr = row_major(mv);
         CHECK_OK(bingham_filter_update(f, y.data(), mvr.data(), zv.data()));
@@ -265,8 +223,8 @@ static void test_update(int d) {
 
 static void test_log_likelihood(int d) {
     for (int rep = 0; rep < 4; ++rep) {
-        MatrixXd m = random_orthogonal(d), mv = random_orthogonal(d);
-        VectorXd z = random_z(d, -15, 0), zv = random_z(d, -15, 0), y = random_unit(d);
+        MatrixXd m = random_orthogonal(rng, d), mv = random_orthogonal(rng, d);
+        VectorXd z = random_z(rng, d, -15, 0), zv = random_z(rng, d, -15, 0), y = random_unit(rng, d);
         bingham_filter *f = make_filter(m, z);
         std::vector<double> mvr = row_major(mv);
         double ll = 0, lf_s, lf_v;
@@ -287,8 +245,8 @@ static void test_log_likelihood(int d) {
 
 static void test_invariants(int d) {
     for (int rep = 0; rep < 4; ++rep) {
-        MatrixXd m = random_orthogonal(d);
-        VectorXd z = random_z(d, -25, 0);
+        MatrixXd m = random_orthogonal(rng, d);
+        VectorXd z = random_z(rng, d, -25, 0);
         std::sort(z.data(), z.data() + d);
         bingham_filter *f = make_filter(m, z);
         State s0 = get_state(f, d);
@@ -296,7 +254,7 @@ static void test_invariants(int d) {
         // aligned noise: M_v = D L(mode)^T M, i.e. columns conj(conj(mode) (+) m_i)
         MatrixXd mv(d, d);
         for (int i = 0; i < d; ++i) mv.col(i) = conjugate(compose_vectors(conjugate(mode), s0.m.col(i)));
-        VectorXd zv = random_z(d, -25, 0);
+        VectorXd zv = random_z(rng, d, -25, 0);
         std::vector<double> mvr = row_major(mv);
         CHECK_OK(bingham_filter_update(f, mode.data(), mvr.data(), zv.data()));
         State s1 = get_state(f, d);

@@ -28,11 +28,12 @@
 #include <vector>
 
 #include "check.h"
+#include "eigen_util.hpp"
 #include "sphere_quadrature.hpp"
 
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
-typedef Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> RowMatrix;
+using namespace eigen_util;
 
 static const std::vector<Node> &nodes_for(int d) {
     static std::vector<Node> n2 = sphere_nodes(2, 64), n3 = sphere_nodes(3, 96), n4 = sphere_nodes(4, 72);
@@ -72,38 +73,9 @@ static Reference reference(const MatrixXd &A) {
 
 static std::mt19937_64 rng(20240611);
 
-static MatrixXd random_orthogonal(int d) {
-    std::normal_distribution<double> g;
-    MatrixXd a(d, d);
-    for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) a(i, j) = g(rng);
-    Eigen::HouseholderQR<MatrixXd> qr(a);
-    return qr.householderQ() * MatrixXd::Identity(d, d);
-}
-
-static VectorXd random_unit(int d) {
-    std::normal_distribution<double> g;
-    VectorXd v(d);
-    for (int i = 0; i < d; ++i) v(i) = g(rng);
-    return v.normalized();
-}
-
-static std::vector<double> row_major(const MatrixXd &m) {
-    RowMatrix r = m;
-    return std::vector<double>(r.data(), r.data() + r.size());
-}
-
-static MatrixXd from_row_major(const std::vector<double> &v, int d) {
-    MatrixXd m(d, d);
-    for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) m(i, j) = v[i * d + j];
-    return m;
-}
-
 
 static MatrixXd precision(const MatrixXd &m, const VectorXd &z) { return m * z.asDiagonal() * m.transpose(); }
 
-static double max_abs(const MatrixXd &m) { return m.cwiseAbs().maxCoeff(); }
 
 // Columns equal up to sign.
 static bool same_columns_up_to_sign(const MatrixXd &a, const MatrixXd &b, double tol) {
@@ -113,18 +85,6 @@ static bool same_columns_up_to_sign(const MatrixXd &a, const MatrixXd &b, double
 }
 
 // Composition x (+) y, d = 2 (complex) or 4 (Hamilton product, scalar first).
-static VectorXd compose_vectors(const VectorXd &x, const VectorXd &y) {
-    VectorXd r(x.size());
-    if (x.size() == 2) {
-        std::complex<double> p = std::complex<double>(x(0), x(1)) * std::complex<double>(y(0), y(1));
-        r << p.real(), p.imag();
-    } else {
-        Eigen::Quaterniond p = Eigen::Quaterniond(x(0), x(1), x(2), x(3)) * Eigen::Quaterniond(y(0), y(1), y(2), y(3));
-        r << p.w(), p.x(), p.y(), p.z();
-    }
-    return r;
-}
-
 // ---- tests --------------------------------------------------------------------------------
 
 static const double Z_CASES[][4] = {
@@ -181,7 +141,7 @@ static void test_moments_pdf_entropy_kl_mode() {
     for (int d = 2; d <= 4; ++d)
         for (int c = 1; c < 6; ++c) {
             VectorXd z = Eigen::Map<const VectorXd>(Z_CASES[c], d);
-            MatrixXd m = random_orthogonal(d);
+            MatrixXd m = random_orthogonal(rng, d);
             MatrixXd a = precision(m, z);
             Reference r = reference(a);
             std::vector<double> mr = row_major(m), s(d * d);
@@ -191,7 +151,7 @@ static void test_moments_pdf_entropy_kl_mode() {
             const int n = 5;
             std::vector<double> x, p(n), lp(n);
             for (int k = 0; k < n; ++k) {
-                VectorXd v = random_unit(d);
+                VectorXd v = random_unit(rng, d);
                 x.insert(x.end(), v.data(), v.data() + d);
             }
             CHECK_OK(bingham_pdf(d, mr.data(), z.data(), n, x.data(), p.data()));
@@ -208,7 +168,7 @@ static void test_moments_pdf_entropy_kl_mode() {
             CHECK_CLOSE(h, std::log(r.F) - r.EA, 1e-10);
             // KL(p1 || p2) = E_p1[log p1 - log p2]
             VectorXd z2 = Eigen::Map<const VectorXd>(Z_CASES[(c % 5) + 1], d) * 0.5;
-            MatrixXd m2 = random_orthogonal(d), a2 = precision(m2, z2);
+            MatrixXd m2 = random_orthogonal(rng, d), a2 = precision(m2, z2);
             Reference r2 = reference(a2);
             double kl_ref = 0;
             for (const Node &nd : nodes_for(d)) {
@@ -241,7 +201,7 @@ static void test_multiply() {
                 z1(i) = 10 * g(rng);
                 z2(i) = 10 * g(rng);
             }
-            MatrixXd m1 = random_orthogonal(d), m2 = random_orthogonal(d);
+            MatrixXd m1 = random_orthogonal(rng, d), m2 = random_orthogonal(rng, d);
             std::vector<double> m1r = row_major(m1), m2r = row_major(m2), m(d * d), z(d);
             CHECK_OK(bingham_multiply(d, m1r.data(), z1.data(), m2r.data(), z2.data(), m.data(), z.data()));
             Eigen::SelfAdjointEigenSolver<MatrixXd> es(precision(m1, z1) + precision(m2, z2));
@@ -260,7 +220,7 @@ static void test_mle() {
         for (int c = 1; c < 6; ++c) {
             if (c == 5 && d < 4) continue; // repeated z: directions not unique
             VectorXd z = Eigen::Map<const VectorXd>(Z_CASES[c], d);
-            MatrixXd m = random_orthogonal(d);
+            MatrixXd m = random_orthogonal(rng, d);
             Reference r = reference(precision(m, z));
             std::vector<double> s = row_major(r.S), mo(d * d), zo(d);
             CHECK_OK(bingham_mle(d, s.data(), mo.data(), zo.data()));
@@ -284,9 +244,9 @@ static void test_mle() {
         std::vector<double> x, w, wone(n, 1.0);
         MatrixXd t = MatrixXd::Zero(d, d), t1 = MatrixXd::Zero(d, d);
         double wsum = 0;
-        VectorXd axis = random_unit(d);
+        VectorXd axis = random_unit(rng, d);
         for (int k = 0; k < n; ++k) {
-            VectorXd v = (axis * 3.0 * (k % 2 ? 1 : -1) + random_unit(d)).normalized();
+            VectorXd v = (axis * 3.0 * (k % 2 ? 1 : -1) + random_unit(rng, d)).normalized();
             x.insert(x.end(), v.data(), v.data() + d);
             double wk = 0.1 + (k % 7);
             w.push_back(wk);
@@ -331,7 +291,7 @@ static void test_compose() {
         for (int c = 1; c < 6; ++c) {
             VectorXd z1 = Eigen::Map<const VectorXd>(Z_CASES[c], d);
             VectorXd z2 = Eigen::Map<const VectorXd>(Z_CASES[(c + 2) % 5 + 1], d);
-            MatrixXd m1 = random_orthogonal(d), m2 = random_orthogonal(d);
+            MatrixXd m1 = random_orthogonal(rng, d), m2 = random_orthogonal(rng, d);
             Reference r1 = reference(precision(m1, z1)), r2 = reference(precision(m2, z2));
             MatrixXd expected = composed_moment(r1.S, r2.S);
             std::vector<double> m1r = row_major(m1), m2r = row_major(m2), m(d * d), z(d), s(d * d);
@@ -351,13 +311,13 @@ static void test_rotate() {
     for (int d : {2, 4})
         for (int c = 1; c < 4; ++c) {
             VectorXd z = Eigen::Map<const VectorXd>(Z_CASES[c], d);
-            MatrixXd m = random_orthogonal(d);
-            VectorXd u = random_unit(d);
+            MatrixXd m = random_orthogonal(rng, d);
+            VectorXd u = random_unit(rng, d);
             std::vector<double> mr = row_major(m), ml(d * d), zl(d), mrr(d * d), zrr(d);
             CHECK_OK(bingham_rotate_left(d, mr.data(), z.data(), u.data(), ml.data(), zl.data()));
             CHECK_OK(bingham_rotate_right(d, mr.data(), z.data(), u.data(), mrr.data(), zrr.data()));
             for (int k = 0; k < 5; ++k) {
-                VectorXd x = random_unit(d), ux = compose_vectors(u, x), xu = compose_vectors(x, u);
+                VectorXd x = random_unit(rng, d), ux = compose_vectors(u, x), xu = compose_vectors(x, u);
                 double p, pl, pr;
                 CHECK_OK(bingham_log_pdf(d, mr.data(), z.data(), 1, x.data(), &p));
                 CHECK_OK(bingham_log_pdf(d, ml.data(), zl.data(), 1, ux.data(), &pl));
@@ -371,7 +331,7 @@ static void test_rotate() {
 static void test_sample() {
     for (int d = 2; d <= 4; ++d) {
         VectorXd z = Eigen::Map<const VectorXd>(Z_CASES[2], d);
-        MatrixXd m = random_orthogonal(d);
+        MatrixXd m = random_orthogonal(rng, d);
         Reference r = reference(precision(m, z));
         std::vector<double> mr = row_major(m);
         const int n = 40000;

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "check.h"
+#include "eigen_util.hpp"
 #include "sphere_quadrature.hpp"
 
 using Eigen::Matrix3d;
@@ -34,7 +35,7 @@ using Eigen::MatrixXd;
 using Eigen::Vector3d;
 using Eigen::Vector4d;
 using Eigen::VectorXd;
-typedef Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> RowMatrix;
+using namespace eigen_util;
 
 static std::mt19937_64 rng(20240611);
 
@@ -43,45 +44,8 @@ static const std::vector<Node> &nodes4() {
     return n;
 }
 
-static VectorXd random_unit(int d) {
-    std::normal_distribution<double> g;
-    VectorXd v(d);
-    for (int i = 0; i < d; ++i) v(i) = g(rng);
-    return v.normalized();
-}
-
-static MatrixXd random_orthogonal(int d) {
-    std::normal_distribution<double> g;
-    MatrixXd a(d, d);
-    for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) a(i, j) = g(rng);
-    Eigen::HouseholderQR<MatrixXd> qr(a);
-    return qr.householderQ() * MatrixXd::Identity(d, d);
-}
-
-static VectorXd random_z(int d, double lo, double hi) {
-    std::uniform_real_distribution<double> u(lo, hi);
-    VectorXd z(d);
-    for (int i = 0; i < d; ++i) z(i) = u(rng);
-    z(d - 1) = 0;
-    return z;
-}
-
-static std::vector<double> row_major(const MatrixXd &m) {
-    RowMatrix r = m;
-    return std::vector<double>(r.data(), r.data() + r.size());
-}
-
-static MatrixXd from_row_major(const double *p, int d) {
-    MatrixXd m(d, d);
-    for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) m(i, j) = p[i * d + j];
-    return m;
-}
-
 static MatrixXd exponent(const MatrixXd &m, const VectorXd &z) { return m * z.asDiagonal() * m.transpose(); }
 
-static double max_abs(const MatrixXd &m) { return m.cwiseAbs().maxCoeff(); }
 
 // R(q) for q = (w, x, y, z): Eigen's constructor is scalar first (its coeffs() are not).
 static Matrix3d rotation(const VectorXd &q) {
@@ -95,7 +59,7 @@ static void test_vector_observation() {
     int worst_fail = 0;
     for (double kappa : kappas)
         for (int rep = 0; rep < 8; ++rep) {
-            VectorXd b = random_unit(3), r = random_unit(3);
+            VectorXd b = random_unit(rng, 3), r = random_unit(rng, 3);
             if (rep == 0) r = b;          // aligned
             if (rep == 1) r = -b;         // opposite
             double m[16], z[4];
@@ -108,7 +72,7 @@ static void test_vector_observation() {
             double top = zv.maxCoeff();
             double scale = std::max(1.0, kappa);
             for (int k = 0; k < 50; ++k) {
-                VectorXd q = random_unit(4);
+                VectorXd q = random_unit(rng, 4);
                 double lhs = q.dot(A * q) - top;
                 double rhs = kappa * r.dot(rotation(q) * b) - kappa;
                 if (std::fabs(lhs - rhs) > 1e-12 * scale) ++worst_fail;
@@ -128,8 +92,8 @@ static void test_vector_observation() {
 
 static void test_update_vector() {
     for (int rep = 0; rep < 12; ++rep) {
-        MatrixXd m0 = random_orthogonal(4);
-        VectorXd z0 = random_z(4, -40, 0), b = random_unit(3), r = random_unit(3);
+        MatrixXd m0 = random_orthogonal(rng, 4);
+        VectorXd z0 = random_z(rng, 4, -40, 0), b = random_unit(rng, 3), r = random_unit(rng, 3);
         double kappa = std::pow(10.0, std::uniform_real_distribution<double>(-2, 4)(rng));
         std::vector<double> m0r = row_major(m0);
         bingham_filter *f = NULL;
@@ -233,8 +197,8 @@ static MatrixXd quadrature_moment4(const MatrixXd &A) {
 static void test_angular_spread() {
     for (int d = 2; d <= 4; d += 2)
         for (int rep = 0; rep < 10; ++rep) {
-            MatrixXd m = random_orthogonal(d);
-            VectorXd z = random_z(d, rep < 5 ? -20 : -3000, 0);
+            MatrixXd m = random_orthogonal(rng, d);
+            VectorXd z = random_z(rng, d, rep < 5 ? -20 : -3000, 0);
             std::vector<double> mr = row_major(m), S(d * d), sp(d);
             CHECK_OK(bingham_second_moment(d, mr.data(), z.data(), S.data()));
             CHECK_OK(bingham_angular_spread(d, mr.data(), z.data(), sp.data()));
@@ -275,8 +239,8 @@ static void test_log_likelihood_vector() {
     std::vector<double> p(n);
     const double kappas[] = {0.3, 2.0, 8.0};
     for (int rep = 0; rep < 4; ++rep) {
-        MatrixXd m = random_orthogonal(4);
-        VectorXd z = random_z(4, -12, 0), b = random_unit(3), r = random_unit(3);
+        MatrixXd m = random_orthogonal(rng, 4);
+        VectorXd z = random_z(rng, 4, -12, 0), b = random_unit(rng, 3), r = random_unit(rng, 3);
         std::vector<double> mr = row_major(m);
         // f_state(q) = pdf(x0) exp(q^T A q - x0^T A x0), pdf(x0) from bingham_pdf at the mode x0
         // (bingham_pdf at all 10^6 nodes would recompute F per point; the state's total mass
