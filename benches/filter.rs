@@ -62,7 +62,6 @@ fn bench_predict(c: &mut Criterion, name: &str, sc: &Scenario) {
         f.predict(&sc.mw, &sc.zw).unwrap();
         f.update(z, &sc.mv, &sc.zv).unwrap();
     }
-    let d = sc.d;
     let mut g = c.benchmark_group("filter_predict");
     g.bench_function(format!("{name} predict"), |b| {
         b.iter_batched(
@@ -93,29 +92,12 @@ fn bench_predict(c: &mut Criterion, name: &str, sc: &Scenario) {
         )
     });
     // A fixed rotation by 0.1 rad (complex / quaternion product), as a nonlinear model would.
-    let (c1, s1) = (0.05f64.cos(), 0.05f64.sin());
     g.bench_function(format!("{name} predict_nonlinear rotation"), |b| {
         b.iter_batched(
             || f.clone(),
             |mut h| {
-                h.predict_nonlinear(
-                    |x, out| {
-                        if d == 2 {
-                            out[0] = x[0] * c1 - x[1] * s1;
-                            out[1] = x[0] * s1 + x[1] * c1;
-                        } else {
-                            // x ⊗ (c, 0, 0, s)
-                            out[0] = x[0] * c1 - x[3] * s1;
-                            out[1] = x[1] * c1 + x[2] * s1;
-                            out[2] = x[2] * c1 - x[1] * s1;
-                            out[3] = x[3] * c1 + x[0] * s1;
-                        }
-                        Ok(())
-                    },
-                    black_box(&sc.mw),
-                    black_box(&sc.zw),
-                )
-                .unwrap();
+                h.predict_nonlinear(common::turn, black_box(&sc.mw), black_box(&sc.zw))
+                    .unwrap();
                 h
             },
             BatchSize::SmallInput,

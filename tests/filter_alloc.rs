@@ -153,19 +153,7 @@ fn nonlinear_steps(sc: &Scenario) {
     let meas: Vec<Vec<f64>> = (0..2).flat_map(|r| simulate(sc, r).1).collect();
     let d = sc.d;
     let mut f = BinghamFilter::new(d, &sc.m0, &sc.z0).unwrap();
-    let (c, s) = (0.05f64.cos(), 0.05f64.sin());
-    let transition = |x: &[f64], out: &mut [f64]| {
-        if d == 2 {
-            out[0] = x[0] * c - x[1] * s;
-            out[1] = x[0] * s + x[1] * c;
-        } else {
-            out[0] = x[0] * c - x[3] * s;
-            out[1] = x[1] * c + x[2] * s;
-            out[2] = x[2] * c - x[1] * s;
-            out[3] = x[3] * c + x[0] * s;
-        }
-        Ok(())
-    };
+    let transition = filter_common::turn;
     f.predict_nonlinear(transition, &sc.mw, &sc.zw).unwrap(); // warm-up: the noise cache
     let before = allocations();
     let mut calls = 0usize;

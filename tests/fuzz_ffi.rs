@@ -3837,6 +3837,19 @@ struct CbCtx {
 }
 
 impl CbCtx {
+    fn new(d: usize, good: CbGood, bad: Option<CbBad>, fail_at: Option<usize>) -> CbCtx {
+        CbCtx {
+            magic: CB_MAGIC,
+            d,
+            good,
+            bad,
+            fail_at,
+            calls: 0,
+            triggered: None,
+            violation: None,
+        }
+    }
+
     fn reset(&mut self) {
         self.calls = 0;
         self.triggered = None;
@@ -4004,16 +4017,7 @@ fn transition_ctx(rng: &mut Rng, d: usize) -> CbCtx {
     } else {
         None
     };
-    CbCtx {
-        magic: CB_MAGIC,
-        d,
-        good,
-        bad,
-        fail_at,
-        calls: 0,
-        triggered: None,
-        violation: None,
-    }
+    CbCtx::new(d, good, bad, fail_at)
 }
 
 fn likelihood_ctx(rng: &mut Rng, d: usize) -> CbCtx {
@@ -4047,16 +4051,7 @@ fn likelihood_ctx(rng: &mut Rng, d: usize) -> CbCtx {
     } else {
         None
     };
-    CbCtx {
-        magic: CB_MAGIC,
-        d,
-        good,
-        bad,
-        fail_at,
-        calls: 0,
-        triggered: None,
-        violation: None,
-    }
+    CbCtx::new(d, good, bad, fail_at)
 }
 
 /// An argument fault of a nonlinear step.

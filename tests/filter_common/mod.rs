@@ -262,3 +262,19 @@ pub fn run_kalman(kf: &Kalman, truth: &[Vec<f64>], meas: &[Vec<f64>]) -> Vec<f64
     }
     errors
 }
+
+/// A transition for the nonlinear prediction: a fixed turn by 0.1 rad, `x ⊕ (cos 0.05, sin 0.05)`
+/// for d = 2 and `x ⊗ (cos 0.05, 0, 0, sin 0.05)` for d = 4, written out (no allocation).
+pub fn turn(x: &[f64], out: &mut [f64]) -> Result<(), String> {
+    let (c, s) = (0.05f64.cos(), 0.05f64.sin());
+    if x.len() == 2 {
+        out[0] = x[0] * c - x[1] * s;
+        out[1] = x[0] * s + x[1] * c;
+    } else {
+        out[0] = x[0] * c - x[3] * s;
+        out[1] = x[1] * c + x[2] * s;
+        out[2] = x[2] * c - x[1] * s;
+        out[3] = x[3] * c + x[0] * s;
+    }
+    Ok(())
+}
