@@ -378,7 +378,7 @@ impl BinghamFilter {
     ///
     /// `a` is called once per deterministic sample of the state (the
     /// [`Scheme::Moments`](crate::deterministic::Scheme::Moments) points: 3 for d = 2, 19 for
-    /// d = 4, or 3 / 7 where that scheme falls back) with a unit vector `x` (length d) and must
+    /// d = 4, or 7 where that scheme falls back) with a unit vector `x` (length d) and must
     /// write the unit vector `a(x)` into its second argument (length d, unit within
     /// `UNIT_TOL`; it is then normalized). It returns `Err(message)` to signal failure. The
     /// sign of `a(x)` does not matter, and `a(−x) = ±a(x)` is the caller's contract (an
