@@ -144,11 +144,12 @@ impl<const D: usize> Samples<D> {
         let hi = self.l[..self.n]
             .iter()
             .fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+        let mut ys = [Vect::<D>::zeros(); MAX_SAMPLES];
         let mut scale = [0.0f64; D];
         for k in 0..self.n {
-            let y = m.transpose() * self.x[k];
+            ys[k] = m.transpose() * self.x[k];
             for i in 0..D {
-                scale[i] = scale[i].max(y[i].abs());
+                scale[i] = scale[i].max(ys[k][i].abs());
             }
         }
         for v in scale.iter_mut() {
@@ -160,7 +161,7 @@ impl<const D: usize> Samples<D> {
         let mut b = [0.0; MAX_UNKNOWNS];
         let mut phi = [0.0; MAX_UNKNOWNS];
         for k in 0..self.n {
-            let y = m.transpose() * self.x[k];
+            let y = &ys[k];
             let mut u = 0;
             for i in 0..D {
                 for j in i..D {
