@@ -12,8 +12,8 @@ use nalgebra::{DMatrix, DVector, DefaultAllocator, Dim, Dyn};
 
 use crate::error::{check_dim, check_finite, Error, Result};
 use crate::matrix::{congruence, sym_eigen, Square, Vector};
-use crate::normalization::{log_normalization_into, Method};
-use crate::params::{check_normalize, normalize, params_row_major, unit};
+use crate::normalization::{log_normalization_into, omega_into, Method};
+use crate::params::{check_normalize, normalize_eigen, params_row_major, unit};
 pub use crate::params::{ORTHOGONALITY_TOL, UNIT_TOL};
 use crate::quaternion::{left, right};
 
@@ -97,7 +97,7 @@ impl Bingham {
 
     /// `ω_i = E[(m_iᵀ x)²] = ∂ log F/∂z_i`, in the order of `z`.
     pub fn omega(&self) -> Result<DVector<f64>> {
-        Ok(log_f_omega(&self.z)?.1)
+        omega(&self.z)
     }
 
     /// `log F` and `ω` together.
@@ -219,6 +219,18 @@ where
     Ok((lf, w))
 }
 
+/// `ω = ∇ log F(z)` alone (exact method; allocation-free for fixed sizes up to 4; for d = 2
+/// without the logarithm of `F`).
+pub(crate) fn omega<D: Dim>(z: &Vector<D>) -> Result<Vector<D>>
+where
+    DefaultAllocator: Allocator<D>,
+{
+    let (d, _) = z.shape_generic();
+    let mut w = Vector::zeros_generic(d, nalgebra::U1);
+    omega_into(z.as_slice(), w.as_mut_slice())?;
+    Ok(w)
+}
+
 /// The eigendecomposition `M1 Z1 M1ᵀ + P2 = V Λ Vᵀ` (Λ ascending, unshifted) behind Bayes'
 /// product of `Bingham(m1, z1)` and the density `∝ exp(xᵀ P2 x)` (`P2` symmetric: a Bingham's
 /// `M2 Z2 M2ᵀ`, or a vector observation's `κ K`). The caller can use `max Λ` (the log of the
@@ -278,7 +290,7 @@ where
     DefaultAllocator: Allocator<D, D> + Allocator<D>,
 {
     let (v, l) = product_eigen_precision(m1, z1, p2)?;
-    let (m, z) = normalize(&v, &l);
+    let (m, z) = normalize_eigen(&v, &l);
     if !z.iter().all(|v| v.is_finite()) {
         return Err(Error::Numerical(
             "Bayes product: the posterior concentrations overflow a double".into(),

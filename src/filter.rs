@@ -46,7 +46,7 @@ use nalgebra::{Const, Matrix4, SMatrix, SVector};
 use std::sync::OnceLock;
 
 use crate::deterministic::{for_each_point, for_each_probe, plan, Scheme};
-use crate::distribution::{bayes_product, log_f_omega, product_eigen_precision, Bingham};
+use crate::distribution::{bayes_product, log_f_omega, omega, product_eigen_precision, Bingham};
 use crate::error::{Error, Result};
 use crate::matrix::{congruence, write_row_major};
 use crate::mle::{cholesky_solve, fit_second_moment, Derivs};
@@ -547,10 +547,15 @@ impl<const D: usize> NoiseCache<D> {
 
     /// The cached entry if it was built from exactly these parameters (lengths D² and D).
     fn lookup(&self, m: &[f64], z: &[f64]) -> Option<&Noise<D>> {
-        match (&self.entry, key_of(m, z)) {
-            (Some(e), Some(k)) if m.len() == D * D && z.len() == D && k == self.key => Some(e),
-            _ => None,
-        }
+        let e = self.entry.as_ref()?;
+        let same = m.len() == D * D
+            && z.len() == D
+            && self
+                .key
+                .iter()
+                .zip(m.iter().chain(z))
+                .all(|(k, v)| *k == v.to_bits());
+        same.then_some(e)
     }
 
     /// Validates and prepares a noise (no caching).
@@ -561,7 +566,7 @@ impl<const D: usize> NoiseCache<D> {
         };
         let moment = match role {
             Role::Process => {
-                let (_, w) = log_f_omega(&capped(&zz))?;
+                let w = omega(&capped(&zz))?;
                 congruence(&mm, &w)
             }
             Role::Measurement => Mat::<D>::zeros(),
@@ -656,7 +661,7 @@ impl<const D: usize> Core<D> {
             Some(u) => right(Const::<D>, u.as_slice()) * self.m,
             None => self.m,
         };
-        let (_, w) = log_f_omega(&capped(&self.z))?;
+        let w = omega(&capped(&self.z))?;
         let a = congruence(&m, &w);
         let c = compose_moments(&a, &noise.moment);
         let (m_new, z_new, solution) = fit_second_moment(&c, self.predicted.as_ref())?;
@@ -967,7 +972,7 @@ impl<const D: usize> Core<D> {
                 out.len()
             )));
         }
-        let (_, w) = log_f_omega(&self.z)?;
+        let w = omega(&self.z)?;
         crate::observation::spread_from_omega(w.as_slice(), out);
         Ok(())
     }

@@ -70,9 +70,10 @@ fn rotation_nr(apq: f64, h: f64) -> (f64, f64, f64) {
             t
         }
     };
-    let c = 1.0 / (1.0 + t * t).sqrt();
-    let s = t * c;
-    (t, s, s / (1.0 + c))
+    // s = t·c and tau = s/(1 + c) with c = 1/r, r = √(1 + t²), as t/r and t/(1 + r): two
+    // independent divisions instead of a chain of three
+    let r = (1.0 + t * t).sqrt();
+    (t, t / r, t / (1.0 + r))
 }
 
 /// Rutishauser's form of the plane rotation `(g, h) → (c·g − s·h, s·g + c·h)`, with

@@ -13,7 +13,7 @@ use crate::distribution::UNIT_TOL;
 use crate::error::{Error, Result};
 use crate::matrix::sym_eigen;
 use crate::mle::mle_from_second_moment;
-use crate::params::{normalize, unit};
+use crate::params::{normalize_eigen, unit};
 
 /// Davenport's matrix of a direction pair: the symmetric, traceless 4×4 matrix `K` with
 /// `qᵀ K q = rᵀ R(q) b` for every unit quaternion `q` (scalar first). With `B = b rᵀ`,
@@ -87,7 +87,7 @@ pub fn vector_observation(body: &[f64], reference: &[f64], kappa: f64) -> Result
     let k = davenport_matrix(&b, &r);
     let (v, _) = sym_eigen(&Matrix4::from_fn(|i, j| k[i][j]))?;
     let z = SVector::<f64, 4>::new(-2.0 * kappa, -2.0 * kappa, 0.0, 0.0);
-    let (m, z) = normalize(&v, &z);
+    let (m, z) = normalize_eigen(&v, &z);
     Ok(Bingham::from_normalized_parts(&m, &z))
 }
 

@@ -23,13 +23,25 @@ pub(crate) fn normalize<D: Dim>(m: &Square<D>, z: &Vector<D>) -> (Square<D>, Vec
 where
     DefaultAllocator: Allocator<D, D> + Allocator<D>,
 {
+    let (mut ms, zs) = normalize_eigen(m, z);
+    reorthonormalize(&mut ms);
+    (ms, zs)
+}
+
+/// [`normalize`] without the re-orthonormalization, for `m` that is orthonormal to a few ulps
+/// already: the eigenvectors of [`crate::matrix::sym_eigen`] (its Jacobi rotations keep
+/// `MᵀM = I` to a few ulps, `crate::linalg`). The filter's prediction and update take `M` from
+/// a fresh eigendecomposition every step, so no error accumulates from step to step.
+pub(crate) fn normalize_eigen<D: Dim>(m: &Square<D>, z: &Vector<D>) -> (Square<D>, Vector<D>)
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D>,
+{
     let (d, _) = m.shape_generic();
     let n = d.value();
     let idx = argsort(z);
     let zmax = z[idx[n - 1]];
     let mut zs = Vector::from_fn_generic(d, U1, |k, _| z[idx[k]] - zmax);
-    let mut ms = Square::from_fn_generic(d, d, |r, k| m[(r, idx[k])]);
-    reorthonormalize(&mut ms);
+    let ms = Square::from_fn_generic(d, d, |r, k| m[(r, idx[k])]);
     zs[n - 1] = 0.0;
     (ms, zs)
 }

@@ -69,10 +69,11 @@ pub(crate) fn log_f_sorted(
     Ok(log_f)
 }
 
-/// `ω1` and `∂ω1/∂z1 = Var(x1²)` of `z = [z1, 0]`, `z1 ≤ 0` (the same formulas as
-/// [`log_f_sorted`], without its output slices; the MLE's start solves many d = 2 problems).
+/// `(ω1, ω2, ∂ω1/∂z1)` of `z = [z1, 0]`, `z1 ≤ 0`, with `∂ω1/∂z1 = Var(x1²)` (the same
+/// formulas as [`log_f_sorted`], without its output slices and without `log F`: the d = 2
+/// moment equation and the MLE's start solve many such problems).
 #[inline]
-pub(crate) fn omega1_with_slope(z1: f64) -> (f64, f64) {
-    let (_, w1, _, e11) = scaled(-0.5 * z1, true);
-    (w1, e11 - w1 * w1)
+pub(crate) fn pair_moments(z1: f64) -> (f64, f64, f64) {
+    let (_, w1, w2, e11) = scaled(-0.5 * z1, true);
+    (w1, w2, e11 - w1 * w1)
 }

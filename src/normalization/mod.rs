@@ -130,6 +130,20 @@ pub fn log_normalization_into(
     log_normalization_on(z, method, Path::detected(), grad, hess)
 }
 
+/// `ω = ∇ log F(z)` alone (exact method) into `grad` (length d). For d = 2 in the form every
+/// normalized distribution has (`z[0] ≤ z[1] = 0`) this is the closed form without `log F`
+/// (a logarithm) and without the sorting; otherwise [`log_normalization_into`]. Errors as
+/// [`log_normalization_into`].
+pub(crate) fn omega_into(z: &[f64], grad: &mut [f64]) -> Result<()> {
+    if z.len() == 2 && grad.len() == 2 && z[1] == 0.0 && z[0] <= 0.0 && z[0].is_finite() {
+        let (w1, w2, _) = d2::pair_moments(z[0]);
+        grad[0] = w1;
+        grad[1] = w2;
+        return Ok(());
+    }
+    log_normalization_into(z, Method::Exact, Some(grad), None).map(|_| ())
+}
+
 /// [`log_normalization_into`] with the exact method and the d = 3, 4 quadrature on the given
 /// kernel (for tests and benchmarks; other d ignore `path`). Errors as
 /// [`log_normalization_into`], and `InvalidArgument` if the CPU cannot run `path`.
