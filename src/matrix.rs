@@ -170,7 +170,7 @@ where
     let mut a = c.transpose();
     let mut v = zeros(d);
     let mut vals = zero_vector(d);
-    // 2n ≤ n² scratch entries (n ≥ 2)
+    // 2n scratch entries, used only for n ≥ 5 (n ≤ 4 runs on local arrays)
     let mut work = zeros(d);
     jacobi_in_place(
         n,

@@ -100,7 +100,15 @@ where
             "second moment must have a positive trace, got {tr}"
         )));
     }
-    let (m, w) = sym_eigen(&symmetrize(&s.map(|v| v / tr)))?;
+    if !tr.is_finite() {
+        return Err(Error::InvalidArgument(format!(
+            "second moment's trace overflows a double ({tr})"
+        )));
+    }
+    // (the decomposition is scale-free: the eigenvalues are normalized afterwards, d divisions
+    // instead of d²)
+    let (m, l) = sym_eigen(&symmetrize(s))?;
+    let w = l.map(|v| v / tr);
     if w[0] < OMEGA_MIN {
         return Err(Error::InvalidArgument(format!(
             "second moment is singular or not positive semidefinite: smallest eigenvalue \
