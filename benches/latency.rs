@@ -12,9 +12,14 @@
 //! - one AHRS sample (gyroscope, accelerometer, magnetometer) on a simulated stream, as a
 //!   steady-state reference.
 //!
-//! Each case is timed alone with `Instant` (about 20–30 ns of clock overhead is included). The
-//! cases are generated from a fixed seed, so runs differ only by the machine's noise. Set
-//! `BINGHAM_LATENCY_CASES` to change the number of cases (default 10⁵).
+//! Each case is timed alone with `Instant` (about 20–30 ns of clock overhead is included), and
+//! (but the AHRS, a stream) run `BINGHAM_LATENCY_REPEATS` times (default 3) on identical input,
+//! each run on a fresh copy of the filter. Two lines per operation: the **best of the runs** of
+//! each case, the case's own cost (an interrupt or a descheduling of the benchmark thread lands
+//! in one run, rarely in all three; these are the figures the targets refer to), and the **first
+//! run**, what a single call met on this machine with its noise (on the 2-core development
+//! VM its maximum is set by the host, tens of µs, whatever the code). The cases are generated
+//! from a fixed seed. Set `BINGHAM_LATENCY_CASES` to change the number of cases (default 10⁵).
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -77,6 +82,23 @@ struct Summary {
 }
 
 impl Summary {
+    /// The two summaries of [`time_case`]'s results: each case's shortest run (its cost) and
+    /// its first run (what a single call met on this machine, interruptions included).
+    fn pair(name: String, first: Vec<u64>, best: Vec<u64>, failures: usize) -> [Summary; 2] {
+        [
+            Summary {
+                name: format!("{name}, best of runs"),
+                ns: best,
+                failures,
+            },
+            Summary {
+                name: format!("{name}, first run"),
+                ns: first,
+                failures,
+            },
+        ]
+    }
+
     fn print(mut self) {
         self.ns.sort_unstable();
         let q = |p: f64| {
@@ -84,7 +106,7 @@ impl Summary {
             self.ns[k] as f64 / 1000.0
         };
         println!(
-            "{:<44} {:>9.2} {:>9.2} {:>9.2} {:>9.2}   ({} cases, {} errors)",
+            "{:<58} {:>9.2} {:>9.2} {:>9.2} {:>9.2}   ({} cases, {} errors)",
             self.name,
             q(0.5),
             q(0.99),
@@ -96,7 +118,32 @@ impl Summary {
     }
 }
 
-fn filter_steps(d: usize, cases: usize, seed: u64) -> Summary {
+/// Times `run` `repeats` times on the same input (each run on a fresh copy made by `setup`,
+/// outside the timing) and returns the first run's time and the shortest (the case's own cost:
+/// an interrupt or a descheduling of the benchmark thread lands in one run, not in all of them).
+fn time_case<S, T>(
+    repeats: usize,
+    mut setup: impl FnMut() -> S,
+    mut run: impl FnMut(&mut S) -> T,
+) -> (u64, u64, T) {
+    let mut first = 0;
+    let mut best = u64::MAX;
+    let mut out = None;
+    for k in 0..repeats.max(1) {
+        let mut s = setup();
+        let t = Instant::now();
+        let r = run(black_box(&mut s));
+        let ns = t.elapsed().as_nanos() as u64;
+        if k == 0 {
+            first = ns;
+        }
+        best = best.min(ns);
+        out = Some(r);
+    }
+    (first, best, out.expect("at least one run"))
+}
+
+fn filter_steps(d: usize, cases: usize, repeats: usize, seed: u64) -> [Summary; 2] {
     let mut rng = StdRng::seed_from_u64(seed);
     let mut f = BinghamFilter::new(
         d,
@@ -104,7 +151,7 @@ fn filter_steps(d: usize, cases: usize, seed: u64) -> Summary {
         &concentrations(&mut rng, d, -2.0, 10.0),
     )
     .unwrap();
-    let mut ns = Vec::with_capacity(cases);
+    let (mut first, mut best) = (Vec::with_capacity(cases), Vec::with_capacity(cases));
     let mut failures = 0;
     for _ in 0..cases {
         let (m, z) = (
@@ -121,23 +168,25 @@ fn filter_steps(d: usize, cases: usize, seed: u64) -> Summary {
         );
         let y = unit(&mut rng, d);
         f.set_state(&m, &z).unwrap();
-        let t = Instant::now();
-        let r = f
-            .predict(black_box(&mw), black_box(&zw))
-            .and_then(|()| f.update(black_box(&y), black_box(&mv), black_box(&zv)));
-        ns.push(t.elapsed().as_nanos() as u64);
+        let (t1, tb, r) = time_case(
+            repeats,
+            || f.clone(),
+            |g| {
+                g.predict(black_box(&mw), black_box(&zw))
+                    .and_then(|()| g.update(black_box(&y), black_box(&mv), black_box(&zv)))
+            },
+        );
+        first.push(t1);
+        best.push(tb);
         failures += usize::from(r.is_err());
     }
-    Summary {
-        name: format!("filter step d = {d} (random state and noises)"),
-        ns,
-        failures,
-    }
+    let name = format!("filter step d = {d} (random state and noises)");
+    Summary::pair(name, first, best, failures)
 }
 
-fn log_f_grad(cases: usize, seed: u64) -> Summary {
+fn log_f_grad(cases: usize, repeats: usize, seed: u64) -> [Summary; 2] {
     let mut rng = StdRng::seed_from_u64(seed);
-    let mut ns = Vec::with_capacity(cases);
+    let (mut first, mut best) = (Vec::with_capacity(cases), Vec::with_capacity(cases));
     let mut failures = 0;
     let mut grad = [0.0; 4];
     for _ in 0..cases {
@@ -145,16 +194,17 @@ fn log_f_grad(cases: usize, seed: u64) -> Summary {
         for v in z.iter_mut() {
             *v = -(10f64).powf(rng.gen_range(-3.0..6.0));
         }
-        let t = Instant::now();
-        let r = log_normalization_into(black_box(&z), Method::Exact, Some(&mut grad), None);
-        ns.push(t.elapsed().as_nanos() as u64);
+        let (t1, tb, r) = time_case(
+            repeats,
+            || (),
+            |_| log_normalization_into(black_box(&z), Method::Exact, Some(&mut grad), None),
+        );
+        first.push(t1);
+        best.push(tb);
         failures += usize::from(r.is_err());
     }
-    Summary {
-        name: "log F + grad, d = 4, z in [-1e6, 0]^4".into(),
-        ns,
-        failures,
-    }
+    let name = "log F + grad, d = 4, z in [-1e6, 0]^4".to_string();
+    Summary::pair(name, first, best, failures)
 }
 
 fn ahrs_samples(cases: usize, seed: u64) -> Summary {
@@ -207,11 +257,19 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(if quick { 200 } else { 100_000 });
     println!(
-        "{:<44} {:>9} {:>9} {:>9} {:>9}   (µs)",
+        "{:<58} {:>9} {:>9} {:>9} {:>9}   (µs)",
         "operation", "p50", "p99", "p99.9", "max"
     );
-    filter_steps(2, cases, 1).print();
-    filter_steps(4, cases, 2).print();
-    log_f_grad(cases, 3).print();
+    let repeats = std::env::var("BINGHAM_LATENCY_REPEATS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(3);
+    for s in filter_steps(2, cases, repeats, 1)
+        .into_iter()
+        .chain(filter_steps(4, cases, repeats, 2))
+        .chain(log_f_grad(cases, repeats, 3))
+    {
+        s.print();
+    }
     ahrs_samples(cases, 4).print();
 }
