@@ -13,6 +13,9 @@ use crate::matrix::{
 
 /// Largest accepted `max |MᵀM − I|` for a user-supplied `M`; `M` is then re-orthonormalized.
 pub const ORTHOGONALITY_TOL: f64 = 1e-6;
+/// Largest `max |MᵀM − I|` (8ε) for which a user-supplied `M` is kept without
+/// re-orthonormalization.
+const ORTHONORMAL_AS_IS: f64 = 8.0 * f64::EPSILON;
 /// Largest accepted `|‖x‖ − 1|` for a user-supplied unit vector; it is then normalized.
 pub const UNIT_TOL: f64 = 1e-6;
 
@@ -46,7 +49,8 @@ where
     (ms, zs)
 }
 
-/// Validates finite parameters and normalizes them ([`normalize`]): `max |MᵀM − I| ≤
+/// Validates finite parameters and normalizes them ([`normalize`], without the
+/// re-orthonormalization if `M` is orthonormal to 8ε already): `max |MᵀM − I| ≤
 /// ORTHOGONALITY_TOL`, and the span of `z` must not overflow. `m_name`, `z_name` name the
 /// arguments in the messages.
 pub(crate) fn check_normalize<D: Dim>(
@@ -64,7 +68,15 @@ where
             "`{m_name}` is not orthogonal: max |MᵀM − I| = {err:e} exceeds {ORTHOGONALITY_TOL:e}"
         )));
     }
-    let (mm, zz) = normalize(m, z);
+    // An M orthonormal to a few ulps already (as every M the library returns: Jacobi keeps
+    // `MᵀM = I` within 6ε) is kept as it is, so that handing a state back (`set_state` with
+    // what `state` returned) reproduces it bit for bit; Gram–Schmidt would only move its last
+    // bits.
+    let (mm, zz) = if err <= ORTHONORMAL_AS_IS {
+        normalize_eigen(m, z)
+    } else {
+        normalize(m, z)
+    };
     // The shift z − max z overflows when the entries span more than the largest double
     // (e.g. z = (MAX, −MAX)): refuse instead of returning a −Inf concentration.
     if let Some(i) = zz.iter().position(|v| !v.is_finite()) {
