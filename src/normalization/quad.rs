@@ -52,7 +52,7 @@
 use super::gauss::gauss_legendre_unit;
 use super::Path;
 use crate::error::Result;
-use crate::special::lanes::{self, Arith, Fused, Plain, F};
+use crate::special::lanes::{self, Arith, Fused, Plain, Span, F};
 use crate::special::pow2_floor;
 
 /// Panel layout of the composite rule.
@@ -225,6 +225,18 @@ impl Group {
         }
     }
 
+    /// What the Bessel arguments `rβ` of a batch share when its radii² lie between `ra` and
+    /// `rb` (either order); [`Span::Mixed`] for a single axis (no Bessel function).
+    fn span(&self, ra: f64, rb: f64) -> Span {
+        match *self {
+            Group::Single { .. } => Span::Mixed,
+            Group::Circle { beta, .. } => {
+                let (xa, xb) = (ra * beta, rb * beta);
+                Span::of(xa.min(xb), xa.max(xb))
+            }
+        }
+    }
+
     /// The scaled value `C·g` alone at one far radius² `r = root²` (for the bound that decides
     /// whether the far half is needed).
     fn eval_far(&self, sc: &Scaling, r: f64, root: f64) -> GroupEval {
@@ -242,7 +254,8 @@ impl Group {
     }
 
     /// Evaluates at the radii² `r = root²` of a batch (the roots are passed to avoid square
-    /// roots; unused in the far position of a circle), scaled by `sc`.
+    /// roots; unused in the far position of a circle), scaled by `sc`; `span` is what the
+    /// Bessel arguments share ([`Group::span`]).
     #[inline(always)]
     fn eval_lanes<
         A: Arith,
@@ -255,6 +268,7 @@ impl Group {
         sc: &Scaling,
         r: F<L>,
         root: F<L>,
+        span: Span,
     ) -> GroupLanes<L> {
         let rr = r * sc.inv_r;
         let zero = F::splat(0.0);
@@ -279,7 +293,7 @@ impl Group {
             Group::Circle { zhi, beta } => {
                 let x = r * beta;
                 let k = if sc.near { root * sc.c } else { F::splat(sc.c) };
-                let b = lanes::bessel::<A, L, L2, L4, FOURTH>(x, k);
+                let b = lanes::bessel::<A, L, L2, L4, FOURTH>(x, k, span);
                 // e^{r zhi}; exactly 1 for zhi = 0 (always so for the far-right group)
                 let ex = if zhi == 0.0 {
                     F::splat(1.0)
@@ -483,6 +497,17 @@ fn half<
     for (lo, hi) in setup.panels {
         panels += 1;
         let width = hi - lo;
+        // The Bessel arguments of the panel's nodes (padding included) lie between those of
+        // its first and last node, computed as in the batches below: if they share a piece of
+        // the fits, or all take the asymptotic series, the batches skip the per-lane search.
+        let (ta, tb) = (lo + width * rx[0], lo + width * rx[rule.n - 1]);
+        let (ra, rb) = (ta * ta, tb * tb);
+        let (oa, ob) = (1.0 - ra, 1.0 - rb);
+        let (span1, span2) = if near_first {
+            (g1.span(ra, rb), g2.span(oa, ob))
+        } else {
+            (g1.span(oa, ob), g2.span(ra, rb))
+        };
         for (xs, ws) in rx.chunks_exact(L).zip(rw.chunks_exact(L)) {
             let mut t = zero;
             let mut w = zero;
@@ -499,8 +524,8 @@ fn half<
             } else {
                 (other, other_root, t2, t)
             };
-            let e1 = g1.eval_lanes::<A, L, L2, L4, FOURTH>(sc1, r1, root1);
-            let e2 = g2.eval_lanes::<A, L, L2, L4, FOURTH>(sc2, r2, root2);
+            let e1 = g1.eval_lanes::<A, L, L2, L4, FOURTH>(sc1, r1, root1, span1);
+            let e2 = g2.eval_lanes::<A, L, L2, L4, FOURTH>(sc2, r2, root2, span2);
             let wg1 = w * e1.g;
             let wg2 = w * e2.g;
             acc.f = A::madd(wg1, e2.g, acc.f);
