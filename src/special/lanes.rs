@@ -212,9 +212,10 @@ pub(crate) fn exp<A: Arith, const L: usize>(x: F<L>) -> F<L> {
     const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
     // below −746 the result is 0 (e^−746 < half the smallest subnormal); −∞ and NaN-free
     let x = x.map(|v| if v < -746.0 { -746.0 } else { v.min(709.0) });
-    let ns = x * LOG2E + SHIFTER;
+    let ns = A::madd(x, F::splat(LOG2E), F::splat(SHIFTER));
     let n = ns + (-SHIFTER);
-    let r = (x - n * LN2_HI) - n * LN2_LO;
+    // x − n·LN2_HI is exact; the second part fused where available (one rounding)
+    let r = A::madd(n, F::splat(-LN2_LO), A::madd(n, F::splat(-LN2_HI), x));
     let r2 = r * r;
     let r4 = r2 * r2;
     let c = |k: usize| F::splat(EXP_TAYLOR[k]);
@@ -252,6 +253,30 @@ fn estrin<A: Arith, const L: usize>(q: impl Fn(usize) -> F<L>, t: F<L>) -> F<L> 
     let b0 = A::madd(a1, t2, a0);
     let b1 = A::madd(a3, t2, a2);
     A::madd(a4, t8, A::madd(b1, t4, b0))
+}
+
+/// [`estrin`] for coefficients whose last `10 − N` are zero (`N` = 8 or 9): the same values
+/// (the zero terms add exact zeros there) without those operations.
+#[inline(always)]
+fn estrin_short<A: Arith, const L: usize, const N: usize>(
+    q: impl Fn(usize) -> F<L>,
+    t: F<L>,
+) -> F<L> {
+    const { assert!(N == 8 || N == 9) };
+    let t2 = t * t;
+    let t4 = t2 * t2;
+    let a0 = A::madd(q(1), t, q(0));
+    let a1 = A::madd(q(3), t, q(2));
+    let a2 = A::madd(q(5), t, q(4));
+    let a3 = A::madd(q(7), t, q(6));
+    let b0 = A::madd(a1, t2, a0);
+    let b1 = A::madd(a3, t2, a2);
+    let low = A::madd(b1, t4, b0);
+    if N == 8 {
+        low
+    } else {
+        A::madd(q(8), t4 * t4, low)
+    }
 }
 
 /// The piece polynomials of `[0, X_ASY)` for lanes whose pieces are `j` at offsets `t = x − c`:
@@ -451,8 +476,10 @@ fn bessel_asymptotic<A: Arith, const L: usize, const FOURTH: bool>(
 ) {
     let s = x.recip();
     let ku = k * s.sqrt();
-    let ga = estrin::<A, L>(|i| F::splat(ASY_TAIL[i][0]), s);
-    let gb = estrin::<A, L>(|i| F::splat(ASY_TAIL[i][1]), s);
+    // the I0 tail has 8 coefficients, the I0 − I1 tail 9 (zero-padded to NT)
+    const { assert!(ASY_TAIL[8][0] == 0.0 && ASY_TAIL[9][0] == 0.0 && ASY_TAIL[9][1] == 0.0) };
+    let ga = estrin_short::<A, L, 8>(|i| F::splat(ASY_TAIL[i][0]), s);
+    let gb = estrin_short::<A, L, 9>(|i| F::splat(ASY_TAIL[i][1]), s);
     let a = A::madd(s, ga, F::splat(ASY_I0_LO));
     let b = A::madd(s, gb, F::splat(ASY_D_LO)) + ASY_D_HI;
     let sb = s * b;
