@@ -33,10 +33,11 @@ pub enum Path {
     Avx2,
     /// x86-64 with AVX-512 (F, VL, DQ), AVX2 and FMA, 8 lanes. Chosen by [`Path::detected`]
     /// where available: on the AMD Zen 4 development machine (512-bit operations in two 256-bit
-    /// passes) it is 0–27 % faster than `Avx2` over the d = 3, 4 benchmark cases, most on the
-    /// graded ones (`benches/normalization.rs`, group `d4_path`). (Before the kernel's
-    /// accumulators were kept in memory and its Bessel fits took per-panel span hints it was
-    /// 10–30 % slower: the AVX2 kernel is limited by instruction count, which 8 lanes halve.)
+    /// passes) it is faster than `Avx2` on every d = 3, 4 benchmark case (criterion, group
+    /// `d4_path` of `benches/normalization.rs`: log F + ∇ 1–21 %, with the Hessian 13–23 %).
+    /// The kernel is limited by its instruction count, which 8 lanes halve. (Before the
+    /// kernel's accumulators were kept in memory and its Bessel fits took per-panel span hints,
+    /// AVX-512 was 4–16 % slower for log F + ∇, and `Avx2` was the choice.)
     Avx512,
 }
 
