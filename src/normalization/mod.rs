@@ -31,9 +31,13 @@ pub enum Path {
     Portable,
     /// x86-64 with AVX2 and FMA, 4 lanes.
     Avx2,
-    /// x86-64 with AVX-512 (F, VL, DQ), AVX2 and FMA, 8 lanes. Not chosen by [`Path::detected`]:
-    /// measured 10–30 % slower than `Avx2` on the AMD Zen 4 development machine, whose 512-bit
-    /// operations take two 256-bit passes (`benches/normalization.rs`, group `d4_path`).
+    /// x86-64 with AVX-512 (F, VL, DQ), AVX2 and FMA, 8 lanes. Chosen by [`Path::detected`]
+    /// where available: on the AMD Zen 4 development machine (512-bit operations in two 256-bit
+    /// passes) it is faster than `Avx2` on every d = 3, 4 benchmark case (criterion, group
+    /// `d4_path` of `benches/normalization.rs`: log F + ∇ 1–21 %, with the Hessian 13–23 %).
+    /// The kernel is limited by its instruction count, which 8 lanes halve. (Before the
+    /// kernel's accumulators were kept in memory and its Bessel fits took per-panel span hints,
+    /// AVX-512 was 4–16 % slower for log F + ∇, and `Avx2` was the choice.)
     Avx512,
 }
 
@@ -59,12 +63,14 @@ impl Path {
         }
     }
 
-    /// The path every evaluation uses, detected on first use: `Avx2` where the CPU has AVX2 and
-    /// FMA, else `Portable`.
+    /// The path every evaluation uses, detected on first use: `Avx512` where the CPU has
+    /// AVX-512 F/VL/DQ, AVX2 and FMA, else `Avx2` where it has AVX2 and FMA, else `Portable`.
     pub fn detected() -> Path {
         static BEST: OnceLock<Path> = OnceLock::new();
         *BEST.get_or_init(|| {
-            if Path::Avx2.available() {
+            if Path::Avx512.available() {
+                Path::Avx512
+            } else if Path::Avx2.available() {
                 Path::Avx2
             } else {
                 Path::Portable

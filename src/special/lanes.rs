@@ -212,9 +212,10 @@ pub(crate) fn exp<A: Arith, const L: usize>(x: F<L>) -> F<L> {
     const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
     // below −746 the result is 0 (e^−746 < half the smallest subnormal); −∞ and NaN-free
     let x = x.map(|v| if v < -746.0 { -746.0 } else { v.min(709.0) });
-    let ns = x * LOG2E + SHIFTER;
+    let ns = A::madd(x, F::splat(LOG2E), F::splat(SHIFTER));
     let n = ns + (-SHIFTER);
-    let r = (x - n * LN2_HI) - n * LN2_LO;
+    // x − n·LN2_HI is exact; the second part fused where available (one rounding)
+    let r = A::madd(n, F::splat(-LN2_LO), A::madd(n, F::splat(-LN2_HI), x));
     let r2 = r * r;
     let r4 = r2 * r2;
     let c = |k: usize| F::splat(EXP_TAYLOR[k]);
@@ -252,6 +253,30 @@ fn estrin<A: Arith, const L: usize>(q: impl Fn(usize) -> F<L>, t: F<L>) -> F<L> 
     let b0 = A::madd(a1, t2, a0);
     let b1 = A::madd(a3, t2, a2);
     A::madd(a4, t8, A::madd(b1, t4, b0))
+}
+
+/// [`estrin`] for coefficients whose last `10 − N` are zero (`N` = 8 or 9): the same values
+/// (the zero terms add exact zeros there) without those operations.
+#[inline(always)]
+fn estrin_short<A: Arith, const L: usize, const N: usize>(
+    q: impl Fn(usize) -> F<L>,
+    t: F<L>,
+) -> F<L> {
+    const { assert!(N == 8 || N == 9) };
+    let t2 = t * t;
+    let t4 = t2 * t2;
+    let a0 = A::madd(q(1), t, q(0));
+    let a1 = A::madd(q(3), t, q(2));
+    let a2 = A::madd(q(5), t, q(4));
+    let a3 = A::madd(q(7), t, q(6));
+    let b0 = A::madd(a1, t2, a0);
+    let b1 = A::madd(a3, t2, a2);
+    let low = A::madd(b1, t4, b0);
+    if N == 8 {
+        low
+    } else {
+        A::madd(q(8), t4 * t4, low)
+    }
 }
 
 /// The piece polynomials of `[0, X_ASY)` for lanes whose pieces are `j` at offsets `t = x − c`:
@@ -414,10 +439,73 @@ pub(crate) struct Bessel<const L: usize> {
     pub x2q: F<L>,
 }
 
+/// What the caller knows about a batch's arguments (see [`Span::of`]): it lets [`bessel`] skip
+/// the per-lane piece search and the selection between the two methods. A hint never changes a
+/// result: each lane's value is the one [`Span::Mixed`] gives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Span {
+    /// Every lane in piece `j` of `[0, X_ASY)`.
+    Piece(usize),
+    /// Every lane at or beyond `X_ASY`.
+    Asymptotic,
+    /// Nothing known.
+    Mixed,
+}
+
+impl Span {
+    /// The span of every argument in `[lo, hi]` (`0 ≤ lo ≤ hi`, or NaN: `Mixed`). The piece index
+    /// does not decrease with `x`, so one piece at both ends is one piece throughout.
+    #[inline(always)]
+    pub fn of(lo: f64, hi: f64) -> Span {
+        if lo >= X_ASY {
+            Span::Asymptotic
+        } else if hi < X_ASY && super::piece_index(lo) == super::piece_index(hi) {
+            Span::Piece(super::piece_index(lo))
+        } else {
+            Span::Mixed
+        }
+    }
+}
+
+/// The asymptotic series for every lane (`x ≥ X_ASY`): the values of [`bessel`] there.
+#[inline(always)]
+fn bessel_asymptotic<A: Arith, const L: usize, const FOURTH: bool>(
+    x: F<L>,
+    k: F<L>,
+    out: &mut Bessel<L>,
+) {
+    let s = x.recip();
+    let ku = k * s.sqrt();
+    // the I0 tail has 8 coefficients, the I0 − I1 tail 9 (zero-padded to NT)
+    const { assert!(ASY_TAIL[8][0] == 0.0 && ASY_TAIL[9][0] == 0.0 && ASY_TAIL[9][1] == 0.0) };
+    let ga = estrin_short::<A, L, 8>(|i| F::splat(ASY_TAIL[i][0]), s);
+    let gb = estrin_short::<A, L, 9>(|i| F::splat(ASY_TAIL[i][1]), s);
+    let a = A::madd(s, ga, F::splat(ASY_I0_LO));
+    let b = A::madd(s, gb, F::splat(ASY_D_LO)) + ASY_D_HI;
+    let sb = s * b;
+    out.i0 = ku * (a + ASY_I0_HI);
+    out.i1 = ku * ((a - sb) + ASY_I0_HI);
+    out.dm = ku * sb;
+    out.xdm = ku * b;
+    if FOURTH {
+        out.i1x = out.i1 * s;
+        let bq = A::madd(
+            s,
+            estrin::<A, L>(|i| F::splat(ASY_Q_TAIL[i]), s),
+            F::splat(ASY_Q_LO),
+        ) + ASY_Q_HI;
+        let kub = ku * bq;
+        out.q = kub * s * s;
+        out.x2q = kub;
+    }
+}
+
 /// The lane-wise [`super::i01e_times`] (and with `FOURTH` [`super::bessel_q_times`] and
 /// `k·i1e(x)/x`) for `x ≥ 0`, `k > 0`: the same fits and series, evaluated for all lanes at
 /// once. Lanes below `X_ASY` take the piece polynomials (coefficients gathered by piece),
-/// the others the asymptotic series; a part that no lane needs is skipped.
+/// the others the asymptotic series; a part that no lane needs is skipped. `span` is what the
+/// caller knows about the arguments ([`Span::Mixed`] if nothing); a lane's result does not
+/// depend on it.
 #[inline(always)]
 pub(crate) fn bessel<
     A: Arith,
@@ -428,8 +516,8 @@ pub(crate) fn bessel<
 >(
     x: F<L>,
     k: F<L>,
+    span: Span,
 ) -> Bessel<L> {
-    let small = x.lt(X_ASY);
     let zero = F::splat(0.0);
     let mut out = Bessel {
         i0: zero,
@@ -440,32 +528,37 @@ pub(crate) fn bessel<
         q: zero,
         x2q: zero,
     };
+    match span {
+        Span::Asymptotic => {
+            bessel_asymptotic::<A, L, FOURTH>(x, k, &mut out);
+            return out;
+        }
+        Span::Piece(j) => {
+            // as below for a batch on one piece, without the per-lane search and selection
+            let t = x - F::splat(PIECES[j].c);
+            let (f1, d, qfit) = piece_shared::<A, L, FOURTH>(j, t);
+            let i1 = if j == 0 { f1 * x } else { f1 };
+            let i0 = i1 + d;
+            let kd = k * d;
+            out.i0 = k * i0;
+            out.i1 = k * i1;
+            out.dm = kd;
+            out.xdm = kd * x;
+            if FOURTH {
+                out.i1x = if j == 0 { k * f1 } else { k * i1 * x.recip() };
+                let qv = k * qfit;
+                out.q = qv;
+                out.x2q = qv * x * x;
+            }
+            return out;
+        }
+        Span::Mixed => {}
+    }
+    let small = x.lt(X_ASY);
     let any_small = small.iter().any(|&b| b);
     let any_large = small.iter().any(|&b| !b);
-    // 1/x: the asymptotic series' variable, and i1e/x for the Hessian
-    let s = if any_large || FOURTH { x.recip() } else { zero };
     if any_large {
-        let ku = k * s.sqrt();
-        let ga = estrin::<A, L>(|i| F::splat(ASY_TAIL[i][0]), s);
-        let gb = estrin::<A, L>(|i| F::splat(ASY_TAIL[i][1]), s);
-        let a = A::madd(s, ga, F::splat(ASY_I0_LO));
-        let b = A::madd(s, gb, F::splat(ASY_D_LO)) + ASY_D_HI;
-        let sb = s * b;
-        out.i0 = ku * (a + ASY_I0_HI);
-        out.i1 = ku * ((a - sb) + ASY_I0_HI);
-        out.dm = ku * sb;
-        out.xdm = ku * b;
-        if FOURTH {
-            out.i1x = out.i1 * s;
-            let bq = A::madd(
-                s,
-                estrin::<A, L>(|i| F::splat(ASY_Q_TAIL[i]), s),
-                F::splat(ASY_Q_LO),
-            ) + ASY_Q_HI;
-            let kub = ku * bq;
-            out.q = kub * s * s;
-            out.x2q = kub;
-        }
+        bessel_asymptotic::<A, L, FOURTH>(x, k, &mut out);
     }
     if any_small {
         // piece index per lane (`super::piece_index`), clamped so that lanes beyond X_ASY
@@ -511,6 +604,7 @@ pub(crate) fn bessel<
         out.xdm = F::select(small, kd * x, out.xdm);
         if FOURTH {
             // k·i1e/x: from the first piece's fit directly (exact limit k/2 at x = 0)
+            let s = x.recip();
             let i1x = F::select(first, k * f1, k * i1 * s);
             out.i1x = F::select(small, i1x, out.i1x);
             let qv = k * qfit;
@@ -571,8 +665,8 @@ mod tests {
                 2f64.powi(n as i32 % 40),
                 2f64.powi(-(n as i32 % 30)),
             ]);
-            let b = bessel::<Plain, 4, 8, 16, true>(x, k);
-            let g = bessel::<Plain, 4, 8, 16, false>(x, k);
+            let b = bessel::<Plain, 4, 8, 16, true>(x, k, Span::Mixed);
+            let g = bessel::<Plain, 4, 8, 16, false>(x, k, Span::Mixed);
             for l in 0..4 {
                 let (i0, i1, dm, xdm) = i01e_times(x.0[l], k.0[l]);
                 let (q, x2q) = bessel_q_times(x.0[l], k.0[l]);
@@ -613,7 +707,7 @@ mod tests {
         for chunk in xs.chunks_exact(4) {
             let x = F([chunk[0], chunk[1], chunk[2], chunk[3]]);
             let k = F::splat(1.0);
-            let b = bessel::<Fused, 4, 8, 16, true>(x, k);
+            let b = bessel::<Fused, 4, 8, 16, true>(x, k, Span::Mixed);
             for l in 0..4 {
                 let (i0, i1, dm, _) = i01e_times(x.0[l], 1.0);
                 let (q, _) = bessel_q_times(x.0[l], 1.0);
@@ -628,6 +722,59 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A span hint never changes a lane's value: batches of sorted arguments (one piece, the
+    /// asymptotic range, or both) give the same bits with the hint `Span::of` finds as with
+    /// `Span::Mixed`, with and without the fourth-moment outputs, plain and fused.
+    #[test]
+    fn span_hints_give_the_same_bits() {
+        let mut xs = arguments();
+        xs.retain(|x| x.is_finite());
+        let mut hinted = [0usize; 3];
+        for (n, chunk) in xs.chunks_exact(4).enumerate() {
+            let mut v = [chunk[0], chunk[1], chunk[2], chunk[3]];
+            // also batches narrow enough to share a piece
+            if n % 2 == 1 {
+                let base = v[0];
+                for (l, x) in v.iter_mut().enumerate() {
+                    *x = base * (1.0 + 1e-3 * l as f64);
+                }
+            }
+            v.sort_by(f64::total_cmp);
+            let x = F(v);
+            let k = F([1.0, 0.5, 2.0, 0.25]);
+            let span = Span::of(v[0], v[3]);
+            hinted[match span {
+                Span::Piece(_) => 0,
+                Span::Asymptotic => 1,
+                Span::Mixed => 2,
+            }] += 1;
+            macro_rules! same {
+                ($a:ty, $fourth:literal) => {{
+                    let h = bessel::<$a, 4, 8, 16, $fourth>(x, k, span);
+                    let m = bessel::<$a, 4, 8, 16, $fourth>(x, k, Span::Mixed);
+                    for (a, b) in [
+                        (h.i0, m.i0),
+                        (h.i1, m.i1),
+                        (h.dm, m.dm),
+                        (h.xdm, m.xdm),
+                        (h.i1x, m.i1x),
+                        (h.q, m.q),
+                        (h.x2q, m.x2q),
+                    ] {
+                        for l in 0..4 {
+                            assert_eq!(a.0[l].to_bits(), b.0[l].to_bits(), "x = {v:?}, {span:?}");
+                        }
+                    }
+                }};
+            }
+            same!(Plain, true);
+            same!(Plain, false);
+            same!(Fused, true);
+            same!(Fused, false);
+        }
+        assert!(hinted.iter().all(|&c| c > 50), "{hinted:?}");
     }
 
     /// Distance in units in the last place (both finite and of the same sign, or zero).
