@@ -306,6 +306,9 @@ pub(crate) enum NewtonStart {
 /// a residual below `MLE_TOL/10`) its point is evaluated without the Hessian first (a wrong
 /// prediction costs one such evaluation); if it has converged, the returned Hessian is
 /// the previous iterate's (it then only serves as a warm start).
+///
+/// d = 2 is the same iteration on the single equation `1/ω_1 − 1/ω̂_1 = 0` in closed form
+/// ([`newton_pair`]), without the matrix machinery; its returned Hessian is the solution's.
 pub(crate) fn newton(
     target: &[f64],
     from: NewtonStart,
@@ -487,7 +490,7 @@ pub(crate) fn initial_guess(t: &[f64], z: &mut [f64]) {
 }
 
 /// [`newton`] for d = 2: `ω_1([z_1, 0]) = ω̂_1/(ω̂_1 + ω̂_2)` by [`pair_solve`] to `MLE_TOL`,
-/// from the evaluated point in `z`, `grad`, `hess` or from the Gaussian start. Writes the
+/// from the evaluated point in `z`, `grad`, `hess` or from [`banerjee`]'s start. Writes the
 /// solution and its derivatives (this is the only evaluation the Hessian of the solution needs
 /// in d = 2: [`pair_moments`] returns it with ω).
 fn newton_pair(

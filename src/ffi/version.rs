@@ -15,7 +15,9 @@ pub const BINGHAM_MIN_DIM: usize = 2;
 /// Largest supported dimension `d`.
 pub const BINGHAM_MAX_DIM: usize = 64;
 /// Tolerance on max |MᵀM − I| (largest absolute entry) when an orthogonal `M` is expected;
-/// accepted matrices are re-orthonormalized internally.
+/// accepted matrices are re-orthonormalized internally (kept as given if already orthonormal to
+/// 8 ulps, as every matrix the library returns, so a returned state handed back reproduces itself
+/// bit for bit).
 pub const BINGHAM_ORTHOGONALITY_TOL: f64 = 1e-6;
 /// Tolerance on |‖x‖ − 1| when a unit vector is expected (points of the sphere, quaternions).
 pub const BINGHAM_UNIT_TOL: f64 = 1e-6;
