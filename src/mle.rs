@@ -105,21 +105,20 @@ where
             "second moment's trace overflows a double ({tr})"
         )));
     }
-    // (the decomposition is scale-free: the eigenvalues are normalized afterwards, d divisions
-    // instead of d²)
+    // The decomposition is scale-free, and Newton normalizes its target by its sum: the
+    // eigenvalues are used as they are (no division by the trace on the way).
     let (m, l) = sym_eigen(&symmetrize(s))?;
-    let w = l.map(|v| v / tr);
-    if w[0] < OMEGA_MIN {
+    if l[0] < OMEGA_MIN * tr {
         return Err(Error::InvalidArgument(format!(
             "second moment is singular or not positive semidefinite: smallest eigenvalue \
              (after normalizing the trace to 1) is {:e} < {OMEGA_MIN:e}; the MLE would have \
              infinite concentration",
-            w[0]
+            l[0] / tr
         )));
     }
     let (sol, _) = match warm {
-        Some(d) => solve_z(&w, Start::Evaluated(d)).or_else(|_| solve_z(&w, Start::Cold)),
-        None => solve_z(&w, Start::Cold),
+        Some(d) => solve_z(&l, Start::Evaluated(d)).or_else(|_| solve_z(&l, Start::Cold)),
+        None => solve_z(&l, Start::Cold),
     }?;
     let (mm, zz) = normalize_eigen(&m, &sol.z);
     Ok((mm, zz, sol))
@@ -468,7 +467,7 @@ pub(crate) fn initial_guess(t: &[f64], z: &mut [f64]) {
             continue;
         }
         // (only a start: the last point also serves if it missed the tolerance)
-        let kp = pair_solve(r, None, 1e-12).0.x;
+        let kp = pair_solve(t[i], last, None, 1e-12).0.x;
         let (mut mu, mut sq) = (0.0, 0.0);
         for (j, &tj) in t[..d - 1].iter().enumerate() {
             if j != i {
@@ -500,7 +499,6 @@ fn newton_pair(
     grad: &mut [f64],
     hess: &mut [f64],
 ) -> Result<usize> {
-    let r = target[0] / (target[0] + target[1]);
     let start = match from {
         NewtonStart::Evaluated => Some(PairPoint {
             x: z[0],
@@ -510,8 +508,9 @@ fn newton_pair(
         }),
         NewtonStart::Guess => None,
     };
-    let (p, steps) = pair_solve(r, start, MLE_TOL);
+    let (p, steps) = pair_solve(target[0], target[1], start, MLE_TOL);
     let steps = steps.ok_or_else(|| {
+        let r = target[0] / (target[0] + target[1]);
         Error::NotConverged(format!(
             "MLE (d = 2): no convergence (relative residual {:e})",
             ((p.w1 - r) / r).abs()
@@ -556,7 +555,8 @@ fn banerjee(w: f64) -> f64 {
     -2.0 * (1.0 - 2.0 * w) * (1.0 + q) / q
 }
 
-/// Solves `ω_1([x, 0]) = r` for `x ≤ 0` (`0 < r ≤ 1/2`) to `|ω_1/r − 1| ≤ tol`, from `start`
+/// Solves `ω_1([x, 0]) = r = a/(a + b)` for `x ≤ 0` (`0 < a ≤ b`, i.e. `0 < r ≤ 1/2`) to
+/// `|ω_1/r − 1| ≤ tol`, from `start`
 /// (an evaluated point) or from `x = Φ(r)` ([`banerjee`], within 7 %). Newton's method on
 /// `1/ω_1 − 1/r`, nearly linear in `x` (`1/ω_1 ≈ 2|x|` when concentrated): `Δ = ω_1²(1/ω_1 −
 /// 1/r)/h = −ω_1 (ω_1/r − 1)/h`, `h = ∂ω_1/∂x`; where `h` has underflowed (|x| ≳ 1e154) its
@@ -565,7 +565,9 @@ fn banerjee(w: f64) -> f64 {
 /// magnitude), so the iteration converges from any start. Returns the last
 /// point and the number of Newton steps, `None` if the bracket collapsed (or the steps ran out)
 /// above the tolerance (beyond the rounding floor of `1e3·tol`).
-fn pair_solve(r: f64, start: Option<PairPoint>, tol: f64) -> (PairPoint, Option<usize>) {
+fn pair_solve(a: f64, b: f64, start: Option<PairPoint>, tol: f64) -> (PairPoint, Option<usize>) {
+    // r and 1/r as two independent divisions (not one after the other)
+    let (r, inv_r) = (a / (a + b), (a + b) / a);
     if r >= 0.5 {
         return (PairPoint::at(0.0), Some(0));
     }
@@ -579,7 +581,6 @@ fn pair_solve(r: f64, start: Option<PairPoint>, tol: f64) -> (PairPoint, Option<
     // ω_1(lo) < r < ω_1(hi)
     let (mut lo, mut hi) = (f64::NEG_INFINITY, 0.0f64);
     let mut steps = 0;
-    let inv_r = 1.0 / r;
     while steps < PAIR_MAX_ITER {
         let err = p.w1 * inv_r - 1.0;
         if err.abs() <= tol {
@@ -735,7 +736,7 @@ mod tests {
         }
         for &x in &xs {
             let (w1, w2, h) = pair_moments(x);
-            let r = w1 / (w1 + w2);
+            let inv_r = (w1 + w2) / w1;
             let starts = [
                 None,
                 Some(PairPoint::at(0.0)),
@@ -745,10 +746,10 @@ mod tests {
                 Some(PairPoint { x, w1, w2, h }),
             ];
             for start in starts {
-                let (p, steps) = pair_solve(r, start, MLE_TOL);
+                let (p, steps) = pair_solve(w1, w2, start, MLE_TOL);
                 let steps = steps.unwrap_or_else(|| panic!("x = {x:e}, start {start:?}: {p:?}"));
                 assert!(steps <= 60, "x = {x:e}: {steps} steps");
-                assert!((p.w1 / r - 1.0).abs() <= MLE_TOL, "x = {x:e}: {p:?}");
+                assert!((p.w1 * inv_r - 1.0).abs() <= MLE_TOL, "x = {x:e}: {p:?}");
                 // the tolerance in ω moves x by up to tol·ω_1/h (≈ tol·|x| when concentrated,
                 // 4·tol near 0); where h underflows, ω_1 ≈ 1/(2|x|)
                 let cond = if h > 0.0 { w1 / h } else { x.abs() };
@@ -762,7 +763,7 @@ mod tests {
             }
         }
         // r = 1/2 (ties) is z = 0
-        assert_eq!(pair_solve(0.5, None, MLE_TOL).0.x, 0.0);
+        assert_eq!(pair_solve(1.0, 1.0, None, MLE_TOL).0.x, 0.0);
     }
 
     #[test]
