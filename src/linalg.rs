@@ -29,8 +29,8 @@ pub(crate) fn jacobi_eigen(a: &DMatrix<f64>) -> (DVector<f64>, DMatrix<f64>) {
 /// triangle read, destroyed), `v` (n×n row-major, receives the eigenvectors as columns), `d`
 /// (n, the eigenvalues, not sorted), `work` (2n scratch; only n ≥ 5 uses it).
 ///
-/// n = 2 is the single rotation of the general path in closed form (bit-identical to it);
-/// n = 3, 4 go to [`jacobi_small`], n ≥ 5 to [`jacobi_general`]. The paths have the same
+/// n = 2 is one rotation in closed form (the general path's rotation by the short-chain
+/// formulas of n = 3, 4: the same eigenpairs within 2 ulps); n = 3, 4 go to [`jacobi_small`], n ≥ 5 to [`jacobi_general`]. The paths have the same
 /// accuracy: orthogonality and reconstruction to a few ulps of ‖A‖, eigenvalues of graded
 /// matrices (`A = D·H·D`, H well conditioned) to a few ulps relative.
 ///
