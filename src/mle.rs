@@ -315,9 +315,8 @@ pub(crate) fn newton(
     grad: &mut [f64],
     hess: &mut [f64],
 ) -> Result<usize> {
-    // d = 2 is one scalar equation in closed form: the same Newton iteration on
-    // 1/ω_1 − 1/ω̂_1, without the matrix machinery (it was three quarters of a d = 2 filter
-    // step). For larger d only the size of the stack scratch differs.
+    // (d = 2 without the matrix machinery: it was three quarters of a d = 2 filter step; for
+    // larger d only the size of the stack scratch differs)
     if target.len() == 2 {
         return newton_pair(target, from, z, grad, hess);
     }

@@ -238,31 +238,13 @@ pub(crate) fn exp<A: Arith, const L: usize>(x: F<L>) -> F<L> {
     e * pow2_shifted(n1s) * pow2_shifted(n2s)
 }
 
-/// `Σ q(k) t^k` (degree 9) by Estrin's scheme, lane-wise; `q(k)` yields the coefficients of
-/// `t^k` (per lane), each fetched where it is first needed.
+/// `Σ_{k<N} q(k) t^k` (`N` = 10, 9 or 8: degree 9, 8 or 7) by Estrin's scheme, lane-wise;
+/// `q(k)` yields the coefficients of `t^k` (per lane), each fetched where it is first needed.
+/// For degree-9 coefficients whose last `10 − N` are zero, `N` < 10 gives the same values (the
+/// zero terms add exact zeros there) without those operations.
 #[inline(always)]
-fn estrin<A: Arith, const L: usize>(q: impl Fn(usize) -> F<L>, t: F<L>) -> F<L> {
-    let t2 = t * t;
-    let t4 = t2 * t2;
-    let t8 = t4 * t4;
-    let a0 = A::madd(q(1), t, q(0));
-    let a1 = A::madd(q(3), t, q(2));
-    let a2 = A::madd(q(5), t, q(4));
-    let a3 = A::madd(q(7), t, q(6));
-    let a4 = A::madd(q(9), t, q(8));
-    let b0 = A::madd(a1, t2, a0);
-    let b1 = A::madd(a3, t2, a2);
-    A::madd(a4, t8, A::madd(b1, t4, b0))
-}
-
-/// [`estrin`] for coefficients whose last `10 − N` are zero (`N` = 8 or 9): the same values
-/// (the zero terms add exact zeros there) without those operations.
-#[inline(always)]
-fn estrin_short<A: Arith, const L: usize, const N: usize>(
-    q: impl Fn(usize) -> F<L>,
-    t: F<L>,
-) -> F<L> {
-    const { assert!(N == 8 || N == 9) };
+fn estrin<A: Arith, const L: usize, const N: usize>(q: impl Fn(usize) -> F<L>, t: F<L>) -> F<L> {
+    const { assert!(N >= 8 && N <= 10) };
     let t2 = t * t;
     let t4 = t2 * t2;
     let a0 = A::madd(q(1), t, q(0));
@@ -272,10 +254,10 @@ fn estrin_short<A: Arith, const L: usize, const N: usize>(
     let b0 = A::madd(a1, t2, a0);
     let b1 = A::madd(a3, t2, a2);
     let low = A::madd(b1, t4, b0);
-    if N == 8 {
-        low
-    } else {
-        A::madd(q(8), t4 * t4, low)
+    match N {
+        8 => low,
+        9 => A::madd(q(8), t4 * t4, low),
+        _ => A::madd(A::madd(q(9), t, q(8)), t4 * t4, low),
     }
 }
 
@@ -307,7 +289,7 @@ fn piece_pairs<A: Arith, const L: usize, const L2: usize>(j: &[usize; L], t: F<L
             F(v)
         }};
     }
-    let g = estrin::<A, L2>(|i| pairs!(|p| p.q[i]), tt);
+    let g = estrin::<A, L2, 10>(|i| pairs!(|p| p.q[i]), tt);
     let f = pairs!(|p| p.hi) + A::madd(g, tt, pairs!(|p| p.lo));
     // Taken apart only now. The barrier keeps the optimizer from rewriting the evaluation into
     // one lane per node, which gathers every coefficient by single 8-byte loads (measured ~15 %
@@ -383,7 +365,7 @@ fn piece_quads<A: Arith, const L: usize, const L4: usize>(
             F(v)
         }};
     }
-    let g = estrin::<A, L4>(|i| quads!(|p| p.q[i]), tt);
+    let g = estrin::<A, L4, 10>(|i| quads!(|p| p.q[i]), tt);
     let f = quads!(|p| p.hi) + A::madd(g, tt, quads!(|p| p.lo));
     // as in `piece_pairs`: evaluated in this layout, then taken apart
     let f = std::hint::black_box(f);
@@ -406,13 +388,13 @@ fn piece_shared<A: Arith, const L: usize, const FOURTH: bool>(
     t: F<L>,
 ) -> (F<L>, F<L>, F<L>) {
     let p = &PIECES[j];
-    let g1 = estrin::<A, L>(|i| F::splat(p.q[i][0]), t);
-    let gd = estrin::<A, L>(|i| F::splat(p.q[i][1]), t);
+    let g1 = estrin::<A, L, 10>(|i| F::splat(p.q[i][0]), t);
+    let gd = estrin::<A, L, 10>(|i| F::splat(p.q[i][1]), t);
     let f1 = A::madd(g1, t, F::splat(p.lo[0])) + p.hi[0];
     let d = A::madd(gd, t, F::splat(p.lo[1])) + p.hi[1];
     let q = if FOURTH {
         let pq = &Q_PIECES[j];
-        let gq = estrin::<A, L>(|i| F::splat(pq.q[i]), t);
+        let gq = estrin::<A, L, 10>(|i| F::splat(pq.q[i]), t);
         A::madd(gq, t, F::splat(pq.lo)) + pq.hi
     } else {
         F::splat(0.0)
@@ -478,8 +460,8 @@ fn bessel_asymptotic<A: Arith, const L: usize, const FOURTH: bool>(
     let ku = k * s.sqrt();
     // the I0 tail has 8 coefficients, the I0 − I1 tail 9 (zero-padded to NT)
     const { assert!(ASY_TAIL[8][0] == 0.0 && ASY_TAIL[9][0] == 0.0 && ASY_TAIL[9][1] == 0.0) };
-    let ga = estrin_short::<A, L, 8>(|i| F::splat(ASY_TAIL[i][0]), s);
-    let gb = estrin_short::<A, L, 9>(|i| F::splat(ASY_TAIL[i][1]), s);
+    let ga = estrin::<A, L, 8>(|i| F::splat(ASY_TAIL[i][0]), s);
+    let gb = estrin::<A, L, 9>(|i| F::splat(ASY_TAIL[i][1]), s);
     let a = A::madd(s, ga, F::splat(ASY_I0_LO));
     let b = A::madd(s, gb, F::splat(ASY_D_LO)) + ASY_D_HI;
     let sb = s * b;
@@ -491,7 +473,7 @@ fn bessel_asymptotic<A: Arith, const L: usize, const FOURTH: bool>(
         out.i1x = out.i1 * s;
         let bq = A::madd(
             s,
-            estrin::<A, L>(|i| F::splat(ASY_Q_TAIL[i]), s),
+            estrin::<A, L, 10>(|i| F::splat(ASY_Q_TAIL[i]), s),
             F::splat(ASY_Q_LO),
         ) + ASY_Q_HI;
         let kub = ku * bq;
