@@ -9,9 +9,7 @@
 //! decomposes the whole set of [`N`] matrices (copying each into the scratch first) and reports
 //! elements per second; divide the median time by [`N`] for one decomposition.
 
-#[allow(dead_code)]
-#[path = "../src/linalg.rs"]
-mod linalg;
+use bingham::internals as linalg;
 
 use std::hint::black_box;
 

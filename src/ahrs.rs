@@ -49,7 +49,7 @@
 use nalgebra::Matrix4;
 
 use crate::error::{Error, Result};
-use crate::filter::BinghamFilter;
+use crate::filter::{BinghamFilter, Noise};
 use crate::observation::{noise_from_angle_std, observation_exponent};
 use crate::quaternion::q4;
 
@@ -387,9 +387,8 @@ struct MagRef {
 pub struct Ahrs {
     params: AhrsParams,
     coeffs: Coeffs,
-    /// The process noise (row-major M, z), fixed for the AHRS's life.
-    noise_m: [f64; 16],
-    noise_z: [f64; 4],
+    /// The process noise, prepared once (fixed for the AHRS's life).
+    noise: Noise<4>,
     filter: Option<BinghamFilter>,
     bias: [f64; 3],
     gyr_lp: [f64; 3],
@@ -407,16 +406,12 @@ impl Ahrs {
     pub fn new(params: &AhrsParams) -> Result<Ahrs> {
         params.validate()?;
         let noise = noise_from_angle_std(4, params.gyro_noise * params.sample_time.sqrt())?;
-        let mut noise_m = [0.0; 16];
-        noise_m.copy_from_slice(&noise.m_row_major());
-        let mut noise_z = [0.0; 4];
-        noise_z.copy_from_slice(noise.z().as_slice());
+        let noise = Noise::process(&noise.m_row_major(), noise.z().as_slice())?;
         let coeffs = Coeffs::new(params);
         Ok(Ahrs {
             params: *params,
             coeffs,
-            noise_m,
-            noise_z,
+            noise,
             filter: None,
             bias: [0.0; 3],
             gyr_lp: [0.0; 3],
@@ -449,7 +444,7 @@ impl Ahrs {
     pub fn quaternion(&self) -> [f64; 4] {
         match &self.filter {
             Some(f) => {
-                let q = f.mode4().unwrap_or([1.0, 0.0, 0.0, 0.0]);
+                let q = f.core4().map_or([1.0, 0.0, 0.0, 0.0], |c| c.mode4());
                 if q[0] < 0.0 {
                     [-q[0], -q[1], -q[2], -q[3]]
                 } else {
@@ -541,7 +536,8 @@ impl Ahrs {
             return self.initialize(gyr, acc, mag);
         }
         // Work on a copy of the filter: the state is assigned only when every step succeeded.
-        let mut f = self.filter.clone().expect("initialized");
+        let mut filter = self.filter.clone().expect("initialized");
+        let f = filter.core4_mut()?;
         let p = self.params;
         let dt = p.sample_time;
 
@@ -571,8 +567,8 @@ impl Ahrs {
             (gyr[2] - bias[2]) * dt,
         ];
         let dq = q4::from_rotation_vector(&w);
-        f.predict_rotation(&dq, &self.noise_m, &self.noise_z)?;
-        let q_prior = f.mode4()?;
+        f.predict_prepared(&dq, &self.noise)?;
+        let q_prior = f.mode4();
 
         // 3. Accelerometer: "up" seen in the sensor frame, low-passed in the inertial frame.
         let mut acc_filter = self.acc_filter.clone();
@@ -585,7 +581,7 @@ impl Ahrs {
             let excess = (an - p.gravity) / p.acc_reject;
             let kappa = 1.0 / (p.acc_noise * p.acc_noise) / (1.0 + excess * excess);
             let b = scale3(&acc_filter.y, 1.0 / an);
-            f.update_exponent(&observation_exponent(&b, &UP, kappa))?;
+            f.update_precision(&observation_exponent(&b, &UP, kappa))?;
         }
 
         // 4. Magnetometer: heading only, with disturbance rejection, low-passed as the
@@ -597,7 +593,7 @@ impl Ahrs {
             mf.turn(&dq);
         }
         if let Some(m) = mag {
-            let q = f.mode4()?;
+            let q = f.mode4();
             if let Some(kappa) = self.magnetic_weight(&q, m, &mut mag_ref) {
                 let mf =
                     mag_filter.get_or_insert_with(|| InertialLowPass::new(c.mag, c.mag_warmup, m));
@@ -609,7 +605,7 @@ impl Ahrs {
                     let delta = mw[0].atan2(mw[1]);
                     let rz = [(0.5 * delta).cos(), 0.0, 0.0, (0.5 * delta).sin()];
                     let q_m = q4::mul(&rz, &q);
-                    f.update_exponent(&heading_exponent(&q_m, kappa))?;
+                    f.update_precision(&heading_exponent(&q_m, kappa))?;
                     heading_observed = true;
                 }
             }
@@ -617,7 +613,7 @@ impl Ahrs {
 
         // 5. Bias from the correction during motion (integral feedback).
         if p.bias_time > 0.0 && rest_timer < p.rest_time {
-            let q_post = f.mode4()?;
+            let q_post = f.mode4();
             let corr = if heading_observed {
                 q4::to_rotation_vector(&q4::mul(&q4::conj(&q_prior), &q_post))
             } else {
@@ -636,7 +632,7 @@ impl Ahrs {
             *b = b.clamp(-p.bias_max, p.bias_max);
         }
 
-        self.filter = Some(f);
+        self.filter = Some(filter);
         self.bias = bias;
         self.gyr_lp = gyr_lp;
         self.acc_lp = acc_lp;
@@ -720,7 +716,8 @@ impl Ahrs {
             )?,
         };
         if !given {
-            f.update_exponent(&observation_exponent(&up_b, &UP, kappa))?;
+            f.core4_mut()?
+                .update_precision(&observation_exponent(&up_b, &UP, kappa))?;
         }
         let mut mag_ref = None;
         if let Some(m) = mag {
@@ -731,7 +728,8 @@ impl Ahrs {
                 let north_b = cross3(&up_b, &east_b);
                 let q0 = q4::from_matrix(&[east_b, north_b, up_b]);
                 if !given {
-                    f.update_exponent(&heading_exponent(&q0, kappa))?;
+                    f.core4_mut()?
+                        .update_precision(&heading_exponent(&q0, kappa))?;
                 }
                 let norm = norm3(m);
                 let dip = (dot3(m, &up_b) / norm).clamp(-1.0, 1.0).asin();

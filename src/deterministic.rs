@@ -53,8 +53,8 @@ use nalgebra::{DefaultAllocator, Dim, U1};
 
 use crate::distribution::Bingham;
 use crate::error::{Error, Result};
-use crate::matrix::{Square, Vector};
-use crate::normalization::{log_normalization_into, Method};
+use crate::linalg::{Square, Vector};
+use crate::normalization::log_f_canonical;
 
 /// A deterministic sampling scheme (see the module documentation).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -182,11 +182,11 @@ pub(crate) fn plan<const N: usize>(
                     "lambda must be in [0, 1], got {lambda}"
                 )));
             }
-            log_normalization_into(z, Method::Exact, Some(grad), None)?;
+            log_f_canonical(z, Some(grad), None)?;
             Ok(tac_plan(grad, lambda))
         }
         Scheme::Moments => {
-            log_normalization_into(z, Method::Exact, Some(&mut *grad), Some(&mut *hess))?;
+            log_f_canonical(z, Some(&mut *grad), Some(&mut *hess))?;
             Ok(moments_plan(grad, hess)
                 .or_else(|| girdle_plan(grad, hess))
                 .unwrap_or_else(|| tac_plan(grad, 0.5)))

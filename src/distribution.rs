@@ -10,11 +10,11 @@
 use nalgebra::allocator::Allocator;
 use nalgebra::{DMatrix, DVector, DefaultAllocator, Dim, Dyn};
 
+use crate::canonical::{check_normalize, normalize_eigen, params_row_major, unit};
+pub use crate::canonical::{ORTHOGONALITY_TOL, UNIT_TOL};
 use crate::error::{check_dim, check_finite, Error, Result};
-use crate::matrix::{congruence, sym_eigen, Square, Vector};
-use crate::normalization::{log_normalization_into, omega_into, Method};
-use crate::params::{check_normalize, normalize_eigen, params_row_major, unit};
-pub use crate::params::{ORTHOGONALITY_TOL, UNIT_TOL};
+use crate::linalg::{congruence, sym_eigen, Square, Vector};
+use crate::normalization::{log_f_canonical, omega_canonical};
 use crate::quaternion::{left, right};
 
 /// A Bingham distribution with `M` orthonormal (columns = principal directions, the last one
@@ -92,7 +92,7 @@ impl Bingham {
 
     /// `log F(Z)` (surface measure, exact method).
     pub fn log_normalization(&self) -> Result<f64> {
-        log_normalization_into(self.z.as_slice(), Method::Exact, None, None)
+        log_f_canonical(self.z.as_slice(), None, None)
     }
 
     /// `ω_i = E[(m_iᵀ x)²] = ∂ log F/∂z_i`, in the order of `z`.
@@ -215,7 +215,7 @@ where
 {
     let (d, _) = z.shape_generic();
     let mut w = Vector::zeros_generic(d, nalgebra::U1);
-    let lf = log_normalization_into(z.as_slice(), Method::Exact, Some(w.as_mut_slice()), None)?;
+    let lf = log_f_canonical(z.as_slice(), Some(w.as_mut_slice()), None)?;
     Ok((lf, w))
 }
 
@@ -227,7 +227,7 @@ where
 {
     let (d, _) = z.shape_generic();
     let mut w = Vector::zeros_generic(d, nalgebra::U1);
-    omega_into(z.as_slice(), w.as_mut_slice())?;
+    omega_canonical(z.as_slice(), w.as_mut_slice())?;
     Ok(w)
 }
 

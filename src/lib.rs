@@ -11,19 +11,18 @@
 //! Quaternions are scalar first, `(w, x, y, z)`.
 
 pub mod ahrs;
+mod canonical;
 pub mod deterministic;
 pub mod distribution;
 pub mod error;
 pub mod ffi;
 pub mod filter;
 mod linalg;
-mod matrix;
 pub mod mle;
 pub mod normalization;
 pub mod observation;
-mod params;
 pub mod quaternion;
-mod sample;
+mod sampler;
 pub mod special;
 #[cfg(test)]
 mod test_rng;
@@ -32,3 +31,10 @@ pub use distribution::Bingham;
 pub use error::{Error, Result, MAX_DIM, MIN_DIM};
 pub use mle::{mle_from_samples, mle_from_second_moment};
 pub use normalization::{log_normalization, Method};
+
+/// Internals exposed for the benchmarks only (`benches/eigen.rs`); not part of the API, may
+/// change without notice.
+#[doc(hidden)]
+pub mod internals {
+    pub use crate::linalg::{jacobi_general, jacobi_in_place};
+}

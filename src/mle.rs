@@ -14,12 +14,12 @@
 use nalgebra::allocator::Allocator;
 use nalgebra::{Const, DMatrix, DefaultAllocator, Dim, Dyn};
 
+use crate::canonical::{normalize_eigen, unit};
 use crate::distribution::Bingham;
 use crate::error::{check_dim, check_finite, Error, Result, MAX_DIM};
-use crate::matrix::{sym_eigen, symmetrize, zero_vector, zeros, Square, Vector};
+use crate::linalg::{cholesky_solve, sym_eigen, symmetrize, zero_vector, zeros, Square, Vector};
 use crate::normalization::d2::pair_moments;
 use crate::normalization::{log_normalization_into, Method};
-use crate::params::{normalize_eigen, unit};
 use crate::quaternion::compose_moments;
 
 /// Smallest accepted eigenvalue of the trace-normalized second moment. Below it the moment
@@ -241,45 +241,6 @@ impl Scratch {
             &mut self.big[..]
         }
     }
-}
-
-/// Solves `A x = b` in place (`a` k×k row-major symmetric positive definite, destroyed;
-/// `b` overwritten by `x`) by Cholesky; `false` if `A` is not numerically positive definite.
-pub(crate) fn cholesky_solve(k: usize, a: &mut [f64], b: &mut [f64]) -> bool {
-    for j in 0..k {
-        let mut s = a[j * k + j];
-        for p in 0..j {
-            s -= a[j * k + p] * a[j * k + p];
-        }
-        // (written to also reject NaN)
-        if s.is_nan() || s <= 0.0 {
-            return false;
-        }
-        let l = s.sqrt();
-        a[j * k + j] = l;
-        for i in j + 1..k {
-            let mut t = a[i * k + j];
-            for p in 0..j {
-                t -= a[i * k + p] * a[j * k + p];
-            }
-            a[i * k + j] = t / l;
-        }
-    }
-    for i in 0..k {
-        let mut t = b[i];
-        for p in 0..i {
-            t -= a[i * k + p] * b[p];
-        }
-        b[i] = t / a[i * k + i];
-    }
-    for i in (0..k).rev() {
-        let mut t = b[i];
-        for p in i + 1..k {
-            t -= a[p * k + i] * b[p];
-        }
-        b[i] = t / a[i * k + i];
-    }
-    true
 }
 
 /// Where [`newton`] starts.
@@ -770,7 +731,7 @@ mod tests {
         let z = SVector::<f64, 4>::from([-250.0, -180.0, -2.0, 0.0]);
         let (_, w) = log_f_omega(&z).unwrap();
         let q = crate::quaternion::left(Const::<4>, &[0.5, 0.5, -0.5, 0.5]);
-        let s = crate::matrix::congruence(&q, &w);
+        let s = crate::linalg::congruence(&q, &w);
         let (m, zf, _) = fit_second_moment(&s, None).unwrap();
         let sd = DMatrix::from_column_slice(4, 4, s.as_slice());
         let (md, zd, _) = fit_second_moment(&sd, None).unwrap();

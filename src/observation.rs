@@ -7,13 +7,13 @@
 
 use nalgebra::{Const, DMatrix, Matrix4, SVector};
 
+use crate::canonical::{normalize_eigen, unit};
 use crate::distribution::Bingham;
 #[allow(unused_imports)] // doc links
 use crate::distribution::UNIT_TOL;
 use crate::error::{Error, Result};
-use crate::matrix::sym_eigen;
+use crate::linalg::sym_eigen;
 use crate::mle::mle_from_second_moment;
-use crate::params::{normalize_eigen, unit};
 
 /// Davenport's matrix of a direction pair: the symmetric, traceless 4×4 matrix `K` with
 /// `qᵀ K q = rᵀ R(q) b` for every unit quaternion `q` (scalar first). With `B = b rᵀ`,

@@ -15,7 +15,7 @@
 use nalgebra::allocator::Allocator;
 use nalgebra::{DMatrix, DefaultAllocator, Dim, Dyn};
 
-use crate::matrix::{symmetrize, zeros, Square};
+use crate::linalg::{symmetrize, zeros, Square};
 
 /// Signs of `L(x)` for complex numbers: `L(x) = [[x0, −x1], [x1, x0]]`.
 const SIGN2: [[f64; 2]; 2] = [[1.0, -1.0], [1.0, 1.0]];

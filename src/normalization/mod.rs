@@ -6,9 +6,9 @@
 //! The gradient of `log F` is `ω_i = ∂ log F / ∂z_i = E[x_i²]` (so `Σ ω_i = 1`), the Hessian of
 //! `log F` is `∂ω_i/∂z_j = Cov(x_i², x_j²)`.
 
+mod contour;
 pub(crate) mod d2;
 mod gauss;
-mod general;
 mod quad;
 #[doc(hidden)]
 pub use quad::{log_f_sorted_fine, log_f_sorted_tuned};
@@ -118,7 +118,7 @@ fn sorted_eval(
         (Method::Saddlepoint, _) => saddlepoint::log_f_sorted(z, grad, hess),
         (Method::Exact, 2) => d2::log_f_sorted(z, grad, hess),
         (Method::Exact, 3 | 4) => quad::log_f_sorted_on(path, z, grad, hess),
-        (Method::Exact, _) => general::log_f_sorted(z, grad, hess),
+        (Method::Exact, _) => contour::log_f_sorted(z, grad, hess),
     }
 }
 
@@ -136,18 +136,49 @@ pub fn log_normalization_into(
     log_normalization_on(z, method, Path::detected(), grad, hess)
 }
 
-/// `ω = ∇ log F(z)` alone (exact method) into `grad` (length d). For d = 2 in the form every
-/// normalized distribution has (`z[0] ≤ z[1] = 0`) this is the closed form without `log F`
-/// (a logarithm) and without the sorting; otherwise [`log_normalization_into`]. Errors as
-/// [`log_normalization_into`].
-pub(crate) fn omega_into(z: &[f64], grad: &mut [f64]) -> Result<()> {
-    if z.len() == 2 && grad.len() == 2 && z[1] == 0.0 && z[0] <= 0.0 && z[0].is_finite() {
+/// Whether `z` is in the canonical form of a normalized distribution: finite, ascending,
+/// `z[d−1] = 0`, `2 ≤ d ≤ MAX_DIM`.
+pub(crate) fn is_canonical(z: &[f64]) -> bool {
+    (2..=crate::error::MAX_DIM).contains(&z.len())
+        && z.iter().all(|v| v.is_finite())
+        && z.windows(2).all(|w| w[0] <= w[1])
+        && z[z.len() - 1] == 0.0
+}
+
+/// `log F(z)` and on request `ω` (length d) and the Hessian (d×d row-major) with the exact
+/// method, for `z` already in canonical form ([`is_canonical`]: what every normalized
+/// distribution, the filter's state and noises and the deterministic points' plan hold).
+///
+/// The crate-private door for those callers: no validation, no sorting and no write-back
+/// through a permutation (debug builds assert the form). The public door,
+/// [`log_normalization_into`], validates and sorts. Errors: `NotConverged` / `Numerical` from
+/// the evaluation, and `Numerical` if `log F` is not finite.
+pub(crate) fn log_f_canonical(
+    z: &[f64],
+    grad: Option<&mut [f64]>,
+    hess: Option<&mut [f64]>,
+) -> Result<f64> {
+    debug_assert!(is_canonical(z), "not canonical: {z:?}");
+    let log_f = sorted_eval(Method::Exact, Path::detected(), z, grad, hess)?;
+    if !log_f.is_finite() {
+        return Err(Error::Numerical(format!(
+            "log F is not finite for z = {z:?}"
+        )));
+    }
+    Ok(log_f)
+}
+
+/// `ω = ∇ log F(z)` alone (exact method) into `grad` (length d) for canonical `z` (see
+/// [`log_f_canonical`]). For d = 2 the closed form without `log F` (a logarithm).
+pub(crate) fn omega_canonical(z: &[f64], grad: &mut [f64]) -> Result<()> {
+    if z.len() == 2 {
+        debug_assert!(is_canonical(z) && grad.len() == 2);
         let (w1, w2, _) = d2::pair_moments(z[0]);
         grad[0] = w1;
         grad[1] = w2;
         return Ok(());
     }
-    log_normalization_into(z, Method::Exact, Some(grad), None).map(|_| ())
+    log_f_canonical(z, Some(grad), None).map(|_| ())
 }
 
 /// [`log_normalization_into`] with the exact method and the d = 3, 4 quadrature on the given

@@ -20,7 +20,7 @@
 //! The approximation is exactly equivariant under shifts (`F̂(Z + aI) = e^a F̂(Z)`), so `c` is
 //! chosen such that `t̂ = 0`, i.e. `½ Σ 1/(c − z_i) = 1` — the same shift as the exact method
 //! uses (solved by Newton's method on a concave function, monotone from below; see
-//! `general::solve_shift`).
+//! `contour::solve_shift`).
 //!
 //! # Derivatives
 //! As in Gilitschenski et al. (2014), Cor. 2 (Kume & Wood 2007, surface measure):
@@ -30,7 +30,7 @@
 //! `E[x_i² x_j²] − ω_i ω_j` are approximate too, and **`Σ ω_i` is not exactly 1** (it is off by
 //! about the same relative amount as `F̂`). Tied values need no special care.
 
-use super::general::solve_shift;
+use super::contour::solve_shift;
 use crate::error::{Error, Result};
 use std::f64::consts::PI;
 

@@ -13,8 +13,8 @@
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
+use super::jacobi::jacobi_in_place;
 use crate::error::{Error, Result};
-use crate::linalg::jacobi_in_place;
 
 /// A `d×d` matrix of the dimension type `D`.
 pub(crate) type Square<D> = OMatrix<f64, D, D>;

@@ -1,5 +1,5 @@
-//! Validation and normalization of user-supplied parameters, generic over the dimension (see
-//! [`crate::matrix`]): the pair `(M, z)` of a Bingham distribution (sort `z` ascending with the
+//! The canonical form of user-supplied parameters, generic over the dimension (see
+//! [`crate::linalg`]): the pair `(M, z)` of a Bingham distribution (sort `z` ascending with the
 //! columns of `M`, shift so `z[d−1] = 0`, re-orthonormalize `M`) and unit vectors.
 //! [`crate::Bingham`], the filter and the observations all go through these functions.
 
@@ -7,7 +7,7 @@ use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, Dim, U1};
 
 use crate::error::{check_finite, Error, Result};
-use crate::matrix::{
+use crate::linalg::{
     argsort, from_row_major, orthogonality_error, reorthonormalize, Square, Vector,
 };
 
@@ -32,7 +32,7 @@ where
 }
 
 /// [`normalize`] without the re-orthonormalization, for `m` that is orthonormal to a few ulps
-/// already: the eigenvectors of [`crate::matrix::sym_eigen`] (its Jacobi rotations keep
+/// already: the eigenvectors of [`crate::linalg::sym_eigen`] (its Jacobi rotations keep
 /// `MᵀM = I` to a few ulps, `crate::linalg`). The filter's prediction and update take `M` from
 /// a fresh eigendecomposition every step, so no error accumulates from step to step.
 pub(crate) fn normalize_eigen<D: Dim>(m: &Square<D>, z: &Vector<D>) -> (Square<D>, Vector<D>)

@@ -1,0 +1,221 @@
+//! The filter for one dimension `D` (2 or 4) on the stack: the state, the warm start of the
+//! moment matching, the noise caches, and the exact steps (prediction by composition and moment
+//! matching, Bayes update, predictive likelihood, spread).
+
+use nalgebra::Const;
+
+use super::noise::{capped, NoiseCache, Role};
+use super::{Mat, Noise, Vect};
+use crate::canonical::{params_row_major, unit};
+use crate::distribution::{bayes_product, log_f_omega, omega, product_eigen_precision};
+use crate::error::{Error, Result};
+use crate::linalg::{congruence, write_row_major};
+use crate::mle::{fit_second_moment, Derivs};
+use crate::quaternion::{compose_moments, left, right};
+
+/// The filter for one dimension.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Core<const D: usize> {
+    /// Orthonormal, row-major; the last column is the mode.
+    pub(super) m: Mat<D>,
+    /// Ascending, `z[D−1] = 0`.
+    pub(super) z: Vect<D>,
+    /// The last prediction's moment-matching solution with its derivatives (warm start).
+    pub(super) predicted: Option<Derivs<Const<D>>>,
+    pub(super) process: NoiseCache<D>,
+    pub(super) measurement: NoiseCache<D>,
+}
+
+impl<const D: usize> Core<D> {
+    pub(super) fn new(m: &[f64], z: &[f64]) -> Result<Self> {
+        let (m, z) = params_row_major(Const::<D>, "m", m, "z", z)?;
+        Ok(Core {
+            m,
+            z,
+            predicted: None,
+            process: NoiseCache::empty(),
+            measurement: NoiseCache::empty(),
+        })
+    }
+
+    pub(super) fn set_state(&mut self, m: &[f64], z: &[f64]) -> Result<()> {
+        let (m, z) = params_row_major(Const::<D>, "m", m, "z", z)?;
+        self.m = m;
+        self.z = z;
+        self.predicted = None;
+        Ok(())
+    }
+
+    pub(super) fn state_into(&self, m: &mut [f64], z: &mut [f64]) -> Result<()> {
+        if m.len() != D * D || z.len() != D {
+            return Err(Error::InvalidDimension(format!(
+                "state buffers must have lengths {} and {D}, got {} and {}",
+                D * D,
+                m.len(),
+                z.len()
+            )));
+        }
+        write_row_major(&self.m, m);
+        z.copy_from_slice(self.z.as_slice());
+        Ok(())
+    }
+
+    pub(super) fn mode_into(&self, out: &mut [f64]) -> Result<()> {
+        if out.len() != D {
+            return Err(Error::InvalidDimension(format!(
+                "mode buffer must have length {D}, got {}",
+                out.len()
+            )));
+        }
+        out.copy_from_slice(self.m.column(D - 1).as_slice());
+        Ok(())
+    }
+
+    /// Prediction `x ⊕ u ⊕ w` from the caller's slices: `u` (unit within `UNIT_TOL`, or `None`
+    /// for the identity) validated, the noise taken from the cache (built on a miss).
+    pub(super) fn predict(&mut self, u: Option<&[f64]>, m_w: &[f64], z_w: &[f64]) -> Result<()> {
+        let u = u.map(|u| unit("u", Const::<D>, u)).transpose()?;
+        let noise = self.process.get(Role::Process, m_w, z_w)?;
+        let (m, z, solution) = composed(&self.m, &self.z, self.predicted.as_ref(), u, noise)?;
+        self.m = m;
+        self.z = z;
+        self.predicted = Some(solution);
+        Ok(())
+    }
+
+    /// The typed door of [`Self::predict`] for in-crate callers that hold their process noise
+    /// prepared once ([`Noise::process`]) and a unit rotation `u` (no validation, no cache
+    /// lookup; `u` is normalized as the slice door normalizes it).
+    pub(crate) fn predict_prepared(&mut self, u: &[f64; D], noise: &Noise<D>) -> Result<()> {
+        let n = u.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let u = Vect::<D>::from_fn(|i, _| u[i] / n);
+        let (m, z, solution) = composed(&self.m, &self.z, self.predicted.as_ref(), Some(u), noise)?;
+        self.m = m;
+        self.z = z;
+        self.predicted = Some(solution);
+        Ok(())
+    }
+
+    /// `M_L = L(ẑ) D M_v`: the likelihood's principal directions.
+    fn likelihood_m(zhat: &Vect<D>, m_v: &Mat<D>) -> Mat<D> {
+        let mut dm = *m_v;
+        for mut row in dm.row_iter_mut().skip(1) {
+            row.neg_mut();
+        }
+        left(Const::<D>, zhat.as_slice()) * dm
+    }
+
+    pub(super) fn update(&mut self, measurement: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<()> {
+        let zhat = unit("measurement", Const::<D>, measurement)?;
+        let noise = self.measurement.get(Role::Measurement, m_v, z_v)?;
+        let ml = Self::likelihood_m(&zhat, &noise.m);
+        let p = congruence(&ml, &noise.z);
+        self.update_precision(&p)
+    }
+
+    /// Bayes product with the likelihood `exp(xᵀ P x)`; the state is assigned only on success.
+    pub(crate) fn update_precision(&mut self, p: &Mat<D>) -> Result<()> {
+        let (m_new, z_new) = bayes_product(&self.m, &self.z, p)?;
+        self.m = m_new;
+        self.z = z_new;
+        Ok(())
+    }
+
+    pub(super) fn log_likelihood(
+        &self,
+        measurement: &[f64],
+        m_v: &[f64],
+        z_v: &[f64],
+    ) -> Result<f64> {
+        let zhat = unit("measurement", Const::<D>, measurement)?;
+        let built;
+        let noise = match self.measurement.lookup(m_v, z_v) {
+            Some(n) => n,
+            None => {
+                built = NoiseCache::<D>::build(Role::Measurement, m_v, z_v)?;
+                &built
+            }
+        };
+        let log_f_noise = *noise
+            .log_f
+            .get_or_init(|| log_f_omega(&noise.z).map_or(f64::NAN, |r| r.0));
+        if !log_f_noise.is_finite() {
+            return Err(Error::Numerical(
+                "log-likelihood: log F of the measurement noise is not finite".into(),
+            ));
+        }
+        let ml = Self::likelihood_m(&zhat, &noise.m);
+        let p = congruence(&ml, &noise.z);
+        let value = self.log_likelihood_precision(&p)? - log_f_noise;
+        if !value.is_finite() {
+            return Err(Error::Numerical(format!(
+                "log-likelihood is not finite ({value})"
+            )));
+        }
+        Ok(value)
+    }
+
+    /// `log ∫ f_state(x) exp(xᵀ P x) dx` (surface measure): with `λ` the largest eigenvalue of
+    /// `M Z Mᵀ + P`, `log F(eig − λ) + λ − log F(Z)`.
+    pub(super) fn log_likelihood_precision(&self, p: &Mat<D>) -> Result<f64> {
+        let (_, l) = product_eigen_precision(&self.m, &self.z, p)?;
+        let top = l[D - 1];
+        let zp = l.map(|v| v - top);
+        // As in the update: the posterior's concentrations may overflow (a state or noise near
+        // the largest double); that is a numerical failure, not an invalid argument.
+        if !zp.iter().all(|v| v.is_finite()) {
+            return Err(Error::Numerical(
+                "log-likelihood: the posterior concentrations are not finite".into(),
+            ));
+        }
+        let (lf_post, _) = log_f_omega(&zp)?;
+        let (lf_state, _) = log_f_omega(&self.z)?;
+        let value = lf_post + top - lf_state;
+        if !value.is_finite() {
+            return Err(Error::Numerical(format!(
+                "log-likelihood is not finite ({value})"
+            )));
+        }
+        Ok(value)
+    }
+
+    pub(super) fn angular_spread_into(&self, out: &mut [f64]) -> Result<()> {
+        if out.len() != D {
+            return Err(Error::InvalidDimension(format!(
+                "spread buffer must have length {D}, got {}",
+                out.len()
+            )));
+        }
+        let w = omega(&self.z)?;
+        crate::observation::spread_from_omega(w.as_slice(), out);
+        Ok(())
+    }
+}
+
+impl Core<4> {
+    /// The mode (the last column of `M`) as a quaternion, scalar first.
+    pub(crate) fn mode4(&self) -> [f64; 4] {
+        let mode = self.m.column(3);
+        [mode[0], mode[1], mode[2], mode[3]]
+    }
+}
+
+/// The state after `x ⊕ u ⊕ w`: the exact second moment of the composition (the state's moment
+/// rotated by `u`, composed with the noise's) fitted by moment matching, warm-started from
+/// `warm`.
+fn composed<const D: usize>(
+    m: &Mat<D>,
+    z: &Vect<D>,
+    warm: Option<&Derivs<Const<D>>>,
+    u: Option<Vect<D>>,
+    noise: &Noise<D>,
+) -> Result<(Mat<D>, Vect<D>, Derivs<Const<D>>)> {
+    let m = match u {
+        Some(u) => right(Const::<D>, u.as_slice()) * m,
+        None => *m,
+    };
+    let w = omega(&capped(z))?;
+    let a = congruence(&m, &w);
+    let c = compose_moments(&a, &noise.moment);
+    fit_second_moment(&c, warm)
+}

@@ -1,0 +1,270 @@
+//! Exponentially scaled modified Bessel functions of the first kind.
+//!
+//! `i0e(x) = e^{-|x|} I0(x)`, `i1e(x) = e^{-|x|} I1(x)`, the difference
+//! `e^{-x} (I0(x) - I1(x))` computed without cancellation, and
+//! `Q(x) = e^{-x} (3 I0(x) - 4 I1(x) + I2(x))` (for Hessians). [`i01e`] returns the first three
+//! at once; the quadrature rules of the normalization constant evaluate the same fits at several
+//! nodes at once (the crate-internal `lanes`).
+//!
+//! # Method
+//!
+//! The coefficients are fitted from scratch by `scripts/bessel_reference.py` (mpmath, 50 digits);
+//! no third-party coefficient set is used.
+//!
+//! * `0 ≤ x < 128`: 96 pieces (width 1/4 on `[0, 8)`, then 16 pieces per octave). On a piece with
+//!   midpoint `c` each function is `f(c + t) = f(c) + t·g(t)`, `f(c)` stored as a double-double
+//!   `hi + lo` and `g` a degree-9 polynomial (Chebyshev interpolant of the divided difference),
+//!   evaluated as `hi + (lo + t·g(t))` by Estrin's scheme. `t = x − c` is exact (Sterbenz) except on
+//!   the first piece. The piece index comes from the exponent and top mantissa bits of `x` (or of
+//!   `x + 8`), so there is no `exp`, no division, no square root and no float-to-int conversion.
+//!   `e^{-x} I1(x)` and the difference `e^{-x} (I0 − I1)` are fitted directly (no cancellation) and
+//!   evaluated together (interleaved coefficients, two lanes per step); `i0e = i1e + (i0e − i1e)` is
+//!   a sum of two positive numbers. On the first piece `[0, 1/4)` the fitted function is
+//!   `e^{-x} I1(x) / x`, so `i1e(x) = x·G(x)` keeps full relative accuracy as `x → 0`.
+//!   The truncation error of every piece is about `2e-17` relative (well below half an ulp).
+//! * `x ≥ 128`: the asymptotic series `e^{-x} I_ν(x) ~ (2πx)^{-1/2} Σ_k (−1)^k a_k(ν) x^{−k}`,
+//!   `a_k(ν) = Π_{j=1..k} (4ν² − (2j−1)²) / (k! 8^k)`, with the coefficients of `I0 − I1` and of
+//!   `3I0 − 4I1 + I2` combined exactly (in rational arithmetic) before rounding: their leading terms
+//!   cancel analytically, so the differences are computed without cancellation. 9, 10 and 11 terms
+//!   keep the truncation error below `3e-18` relative at `x = 128` for `I0`, `I0 − I1` and `Q`.
+//!
+//! Accuracy, measured against the 50-digit reference `tests/data/bessel_reference.csv`
+//! (`tests/special.rs`; figures in `docs/accuracy.md`, § "Bessel functions"): within 1 ulp of the
+//! correctly rounded value on `[0, 128)`; beyond, where the roundings of `1/x` and of its square
+//! root enter, within a few ulp. Only `+`, `−` and `×` are used
+//! (plus one division and one square root for `x ≥ 128`); no `mul_add`, which is a slow library
+//! call unless FMA is enabled at compile time.
+//!
+//! Speed: `benches/special.rs` (criterion); the medians are in `docs/speed.md`.
+//!
+//! The crate-internal module `lanes` evaluates the same fits and series for several arguments at once (SIMD), for the
+//! quadrature of the normalization constant; its results equal these functions' (bit for bit
+//! without fused multiply-adds, to rounding with them).
+
+pub(crate) mod lanes;
+mod tables;
+
+use tables::{
+    ASY_D_HI, ASY_D_LO, ASY_I0_HI, ASY_I0_LO, ASY_Q_HI, ASY_Q_LO, ASY_Q_TAIL, ASY_TAIL, NT, PIECES,
+    Q_PIECES, X_ASY,
+};
+
+/// Coefficients of one function on one piece: `f(c + t) = hi + (lo + t·g(t))`, `g(t) = Σ q[k] t^k`.
+#[derive(Clone, Copy)]
+struct Poly {
+    hi: f64,
+    lo: f64,
+    q: [f64; NT],
+}
+
+/// Two values evaluated together by the same sequence of operations.
+type Lanes = [f64; 2];
+
+/// One piece of `[0, 128)`: midpoint `c` and, as lane pairs `[i1, d]`, the coefficients of
+/// `e^{-x} I1(x)` (on the first piece `e^{-x} I1(x) / x`) and of `e^{-x} (I0(x) − I1(x))`:
+/// `f(c + t) = hi + (lo + t·Σ q[k] t^k)` in each lane.
+#[derive(Clone, Copy)]
+#[repr(C, align(16))]
+struct Piece {
+    q: [Lanes; NT],
+    hi: Lanes,
+    lo: Lanes,
+    c: f64,
+}
+
+#[inline(always)]
+fn madd(a: Lanes, b: Lanes, t: f64) -> Lanes {
+    [a[0] + b[0] * t, a[1] + b[1] * t]
+}
+
+/// `Σ q[k] t^k` (degree 9) in both lanes by Estrin's scheme: depth 4 instead of Horner's 9.
+#[inline(always)]
+fn estrin2(q: &[Lanes; NT], t: f64) -> Lanes {
+    let t2 = t * t;
+    let t4 = t2 * t2;
+    let t8 = t4 * t4;
+    let a0 = madd(q[0], q[1], t);
+    let a1 = madd(q[2], q[3], t);
+    let a2 = madd(q[4], q[5], t);
+    let a3 = madd(q[6], q[7], t);
+    let a4 = madd(q[8], q[9], t);
+    let b0 = madd(a0, a1, t2);
+    let b1 = madd(a2, a3, t2);
+    madd(madd(b0, b1, t4), a4, t8)
+}
+
+/// `Σ q[k] t^k` (degree 9) by Estrin's scheme.
+#[inline(always)]
+fn estrin(q: &[f64; NT], t: f64) -> f64 {
+    let t2 = t * t;
+    let t4 = t2 * t2;
+    let t8 = t4 * t4;
+    let a0 = q[0] + q[1] * t;
+    let a1 = q[2] + q[3] * t;
+    let a2 = q[4] + q[5] * t;
+    let a3 = q[6] + q[7] * t;
+    let a4 = q[8] + q[9] * t;
+    let b0 = a0 + a1 * t2;
+    let b1 = a2 + a3 * t2;
+    (b0 + b1 * t4) + a4 * t8
+}
+
+/// Index of a piece containing `x`, `0 ≤ x < 128` (branch-free; no float-to-int conversion).
+///
+/// `[0, 8)`: 32 pieces of width 1/4; `x + 8 ∈ [8, 16)` has the piece number in its top five
+/// mantissa bits. Where `x + 8` rounds up across a boundary the next piece is chosen, whose
+/// polynomial is then used at most half an ulp of 8 outside its interval — harmless (this includes
+/// `x` just below 8, where `x + 8` may round to 16 and select piece 32, the first one of `[8, 8.5)`).
+/// `[8, 128)`: 16 pieces per octave, numbered by the biased exponent (1026..=1029) and the top four
+/// mantissa bits of `x` itself.
+#[inline(always)]
+fn piece_index(x: f64) -> usize {
+    let small = (((x + 8.0).to_bits() >> 47) as usize).wrapping_sub(1026 << 5);
+    let large = ((x.to_bits() >> 48) as usize).wrapping_sub((1026 << 4) - 32);
+    if x < 8.0 {
+        small
+    } else {
+        large
+    }
+}
+
+/// `(i0e, i1e, i0e − i1e)` for `x ≥ 0` (or NaN).
+#[inline(always)]
+fn i01e_nonneg(x: f64) -> (f64, f64, f64) {
+    if x < X_ASY {
+        let j = piece_index(x);
+        let p = &PIECES[j];
+        let t = x - p.c;
+        let g = estrin2(&p.q, t);
+        let r = madd(p.lo, g, t);
+        // First piece: lane 0 holds e^{-x} I1(x) / x.
+        let m = if j == 0 { x } else { 1.0 };
+        let (i1, d) = ((p.hi[0] + r[0]) * m, p.hi[1] + r[1]);
+        (i1 + d, i1, d)
+    } else {
+        // Also reached by NaN, which propagates.
+        let s = 1.0 / x;
+        let u = s.sqrt();
+        // sqrt(x)·i0e = ASY_I0 + a,  x^{3/2}·d = b,  sqrt(x)·i1e = ASY_I0 + a − s·b.
+        let g = estrin2(&ASY_TAIL, s);
+        let a = ASY_I0_LO + s * g[0];
+        let b = ASY_D_HI + (ASY_D_LO + s * g[1]);
+        let sb = s * b;
+        (u * (ASY_I0_HI + a), u * (ASY_I0_HI + (a - sb)), u * sb)
+    }
+}
+
+/// `e^{-|x|} I0(x)`, the exponentially scaled modified Bessel function of order 0 (even in `x`).
+///
+/// `i0e(0) = 1`, `i0e(±∞) = 0`; within 1 ulp of the correctly rounded value (measured, see the
+/// module documentation).
+#[inline]
+#[must_use]
+pub fn i0e(x: f64) -> f64 {
+    i01e_nonneg(x.abs()).0
+}
+
+/// `e^{-|x|} I1(x)`, the exponentially scaled modified Bessel function of order 1 (odd in `x`).
+///
+/// `i1e(0) = 0`, `i1e(±∞) = ±0`; within 2 ulp (measured), also for tiny `|x|`, where
+/// `i1e(x) ≈ x/2`.
+#[inline]
+#[must_use]
+pub fn i1e(x: f64) -> f64 {
+    i01e_nonneg(x.abs()).1.copysign(x)
+}
+
+/// `e^{-x} (I0(x) − I1(x))` for `x ≥ 0`, computed without cancellation (negative `x` is taken as `|x|`).
+///
+/// For large `x` this is `≈ (2πx)^{-1/2} / (2x)`, a small fraction of `i0e(x)`; it is fitted and
+/// expanded directly, so its relative error stays below 4e-16 (measured) for all `x` — a plain
+/// `i0e(x) - i1e(x)` would lose `log10(2x)` digits. `i0e_minus_i1e(0) = 1`.
+#[inline]
+#[must_use]
+pub fn i0e_minus_i1e(x: f64) -> f64 {
+    i01e_nonneg(x.abs()).2
+}
+
+/// `(i0e(x), i1e(x), i0e_minus_i1e(x))` at once, sharing all work; meant for `x ≥ 0`.
+///
+/// The three values are bit-for-bit those of [`i0e`], [`i1e`] and [`i0e_minus_i1e`]; for negative
+/// `x` that means `i0e(|x|)`, `−i1e(|x|)` and `i0e_minus_i1e(|x|)`. A table lookup and one
+/// two-lane degree-9 polynomial for `x < 128`; one division, one square root and one two-lane
+/// series beyond.
+#[inline]
+#[must_use]
+pub fn i01e(x: f64) -> (f64, f64, f64) {
+    let (i0, i1, d) = i01e_nonneg(x.abs());
+    (i0, i1.copysign(x), d)
+}
+
+/// `(k·i0e(x), k·i1e(x), k·(i0e − i1e)(x), k·x·(i0e − i1e)(x))` for `x ≥ 0` and a scale `k > 0`,
+/// without intermediate underflow: for `x ≥ 128` the factor `k·x^{−1/2}` is formed first, so
+/// with `k ≈ √x` every output is O(1) except `k·(i0e − i1e) ≈ 1/(2x)` (representable for all
+/// finite `x`). The normalization constant's scaled quadrature and the d = 2 closed form use it
+/// for arguments up to the largest double, where `i0e − i1e ≈ x^{−3/2}/5` underflows.
+/// For `x < 128` the results are those of [`i01e`] times `k`.
+#[inline(always)]
+pub(crate) fn i01e_times(x: f64, k: f64) -> (f64, f64, f64, f64) {
+    if x < X_ASY {
+        let (i0, i1, d) = i01e_nonneg(x);
+        let kd = k * d;
+        (k * i0, k * i1, kd, kd * x)
+    } else {
+        let s = 1.0 / x;
+        let ku = k * s.sqrt();
+        let g = estrin2(&ASY_TAIL, s);
+        let a = ASY_I0_LO + s * g[0];
+        let b = ASY_D_HI + (ASY_D_LO + s * g[1]);
+        let sb = s * b;
+        (
+            ku * (ASY_I0_HI + a),
+            ku * (ASY_I0_HI + (a - sb)),
+            ku * sb,
+            ku * b,
+        )
+    }
+}
+
+/// `(k·Q(x), k·x²·Q(x))` (see [`bessel_q`]) for `x ≥ 0` and a scale `k > 0`, formed like
+/// [`i01e_times`] so that `k·x²·Q ≈ 0.6·k/√x` never underflows when it is representable.
+#[inline(always)]
+pub(crate) fn bessel_q_times(x: f64, k: f64) -> (f64, f64) {
+    if x < X_ASY {
+        let kq = k * bessel_q(x);
+        (kq, kq * x * x)
+    } else {
+        let s = 1.0 / x;
+        let ku = k * s.sqrt();
+        let b = ASY_Q_HI + (ASY_Q_LO + s * estrin(&ASY_Q_TAIL, s));
+        let kub = ku * b;
+        (kub * s * s, kub)
+    }
+}
+
+/// The largest power of two `≤ x` for `x ≥ 1` finite (an exact scale factor).
+#[inline(always)]
+pub(crate) fn pow2_floor(x: f64) -> f64 {
+    f64::from_bits(x.to_bits() & 0xfff0_0000_0000_0000)
+}
+
+/// `Q(x) = e^{-x} (3 I0(x) − 4 I1(x) + I2(x))` for `x ≥ 0` (negative `x` is taken as `|x|`).
+///
+/// Equals `4 (i0e − i1e) − 2 i1e / x`. `Q(0) = 3`, and `Q(x) ≈ (3/2) (2πx)^{-1/2} x^{-2}` for
+/// large `x`, i.e. `O(x^{-2})` relative to `i0e`: the formula above would lose `log10(x)` digits, so
+/// `Q` is fitted and expanded directly (no cancellation); relative error below 4e-16 (measured).
+#[inline]
+#[must_use]
+pub fn bessel_q(x: f64) -> f64 {
+    let x = x.abs();
+    if x < X_ASY {
+        let j = piece_index(x);
+        let p = &Q_PIECES[j];
+        let t = x - PIECES[j].c;
+        p.hi + (p.lo + t * estrin(&p.q, t))
+    } else {
+        let s = 1.0 / x;
+        let b = ASY_Q_HI + (ASY_Q_LO + s * estrin(&ASY_Q_TAIL, s));
+        b / ((x * x) * x.sqrt())
+    }
+}
