@@ -1,5 +1,5 @@
 //! One filter step (predict + update) in the JAIF Sec. 7 scenarios (criterion).
-//! Targets (median): d = 2 ≤ 0.3 µs, d = 4 ≤ 4 µs (issue 11; the README has the measured figures).
+//! Targets (median): d = 2 ≤ 0.3 µs, d = 4 ≤ 4 µs (issue 11; the measured figures are in docs/speed.md).
 //!
 //! The filter runs on simulated measurements (the library's sampler, fixed seeds), cycling
 //! through 10 runs of 100 steps, so the state is in its normal operating range; the noise

@@ -1,4 +1,4 @@
-//! MLE from a second moment (criterion). Targets: d = 4 ≤ 4 µs each (issue 11; measured figures in the README).
+//! MLE from a second moment (criterion). Targets: d = 4 ≤ 4 µs each (issue 11; measured figures in docs/speed.md).
 
 use bingham::{mle_from_second_moment, Bingham};
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
