@@ -117,7 +117,9 @@ fn imports_run_down_the_layers() {
             continue; // the crate root declares and re-exports every module
         }
         let Some(&lf) = layer.get(from.as_str()) else {
-            wrong.push(format!("{rel}: module `{from}` has no layer in tests/layering.rs"));
+            wrong.push(format!(
+                "{rel}: module `{from}` has no layer in tests/layering.rs"
+            ));
             continue;
         };
         for to in crate_paths(&text) {
@@ -169,7 +171,11 @@ fn imports_run_down_the_layers() {
     for n in edges.keys() {
         visit(n, &edges, &mut state, &mut Vec::new(), &mut wrong);
     }
-    assert!(wrong.is_empty(), "layering violations:\n{}", wrong.join("\n"));
+    assert!(
+        wrong.is_empty(),
+        "layering violations:\n{}",
+        wrong.join("\n")
+    );
 }
 
 #[test]

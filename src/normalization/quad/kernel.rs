@@ -85,11 +85,11 @@ pub(super) fn half_setup(lay: &Layout, g1: &Group, g2: &Group, near_first: bool)
 #[inline(always)]
 pub(super) fn half<
     A: Arith,
-    pub(super) const L: usize,
+    const L: usize,
     const L2: usize,
     const L4: usize,
     const N1: usize,
-    pub(super) const FOURTH: bool,
+    const FOURTH: bool,
 >(
     rule: &Rule,
     g1: &Group,
