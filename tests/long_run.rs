@@ -11,7 +11,7 @@
 //! After every step: no NaN/Inf, M orthonormal to 1e-12, z finite, ascending, z[d−1] = 0 (a
 //! valid Bingham state), and the scenario's own sanity checks. Every step must succeed (valid
 //! inputs; the prediction caps concentrations at `MAX_CONCENTRATION`, documented in
-//! src/filter.rs, and the update works for any finite concentration).
+//! src/filter/, and the update works for any finite concentration).
 //!
 //! Steps per scenario and dimension: `BINGHAM_LONG_STEPS` (default 10⁴ in `cargo test`;
 //! `make long` runs 10⁶).

@@ -19,7 +19,7 @@ use std::sync::OnceLock;
 use crate::error::{check_dim, check_finite, Error, Result, MAX_DIM};
 
 /// The compiled kernel that evaluates the d = 3, 4 quadrature nodes (several at a time, see
-/// `quad.rs`). [`Path::detected`] picks the one every evaluation uses, once per process; the
+/// `quad/`). [`Path::detected`] picks the one every evaluation uses, once per process; the
 /// others exist for tests and benchmarks ([`log_f_with_path`]). All paths agree to rounding
 /// (they differ only in fused versus separate multiply-adds, `tests/dispatch.rs`); each is
 /// deterministic: the same input gives the same bits on every call and thread.
@@ -34,10 +34,8 @@ pub enum Path {
     /// x86-64 with AVX-512 (F, VL, DQ), AVX2 and FMA, 8 lanes. Chosen by [`Path::detected`]
     /// where available: on the AMD Zen 4 development machine (512-bit operations in two 256-bit
     /// passes) it is faster than `Avx2` on every d = 3, 4 benchmark case (criterion, group
-    /// `d4_path` of `benches/normalization.rs`: log F + ∇ 1–21 %, with the Hessian 13–23 %).
-    /// The kernel is limited by its instruction count, which 8 lanes halve. (Before the
-    /// kernel's accumulators were kept in memory and its Bessel fits took per-panel span hints,
-    /// AVX-512 was 4–16 % slower for log F + ∇, and `Avx2` was the choice.)
+    /// `d4_path` of `benches/normalization.rs`; figures in `docs/speed.md`, row `d4-path`).
+    /// The kernel is limited by its instruction count, which 8 lanes halve.
     Avx512,
 }
 

@@ -292,8 +292,9 @@ fn piece_pairs<A: Arith, const L: usize, const L2: usize>(j: &[usize; L], t: F<L
     let g = estrin::<A, L2, 10>(|i| pairs!(|p| p.q[i]), tt);
     let f = pairs!(|p| p.hi) + A::madd(g, tt, pairs!(|p| p.lo));
     // Taken apart only now. The barrier keeps the optimizer from rewriting the evaluation into
-    // one lane per node, which gathers every coefficient by single 8-byte loads (measured ~15 %
-    // slower for the whole quadrature); it does not change any value.
+    // one lane per node, which gathers every coefficient by single 8-byte loads (measurably
+    // slower for the whole quadrature: docs/speed.md, row `lanes-barrier`); it does not change
+    // any value.
     let f = std::hint::black_box(f);
     let mut i1 = [0.0; L];
     let mut d = [0.0; L];

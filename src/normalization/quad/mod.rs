@@ -64,7 +64,7 @@ use crate::special::pow2_floor;
 mod kernel;
 mod simd;
 
-use kernel::{half_setup, HalfSetup, Sums};
+use kernel::half_setup;
 use simd::half_on;
 
 /// Panel layout of the composite rule.
