@@ -28,7 +28,7 @@ setup(
     rust_extensions=[
         # The crate's cdylib, without Python bindings (Binding.NoBinding): cargo builds it in
         # release mode and setuptools-rust puts it at bingham/_lib/libbingham.abi3.so, where
-        # bingham/__init__.py loads it with ctypes.
+        # bingham/_library.py loads it with ctypes.
         RustExtension(
             "bingham._lib.libbingham",
             path=CARGO_TOML,

@@ -75,7 +75,7 @@ class Binding(unittest.TestCase):
             header = f.read()
         declared = set(re.findall(r"^[a-z][^\n]*?\b(bingham_\w+)\(", header, re.M))
         self.assertIn("bingham_mle", declared)
-        self.assertEqual(declared, set(bh._SIGNATURES), "bind new functions in python/bingham/__init__.py")
+        self.assertEqual(declared, set(bh._SIGNATURES), "bind new functions in python/bingham/_library.py")
         # the number of parameters agrees with the header
         for name, params in re.findall(r"^[a-z][^\n]*?\b(bingham_\w+)\(([^)]*)\)", header, re.M):
             n = 0 if params.strip() in ("", "void") else params.count(",") + 1

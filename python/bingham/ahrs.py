@@ -1,0 +1,165 @@
+"""The Bingham AHRS: :class:`Ahrs`, owning a ``bingham_ahrs`` handle (gyroscope,
+accelerometer, optional magnetometer), and its parameters :class:`AhrsParams`."""
+
+from __future__ import annotations
+
+import ctypes
+from typing import Dict, Optional, Tuple, Union
+
+import numpy as np
+
+from ._arrays import Array, ArrayLike, _in, _ptr
+from .errors import _check
+from ._library import lib
+
+__all__ = ["AhrsParams", "Ahrs"]
+
+
+class AhrsParams(ctypes.Structure):
+    """``bingham_ahrs_params`` (all angles in radians, times in seconds); build it with
+    :meth:`default`, which gives the tuned defaults."""
+
+    _fields_ = [
+        ("sample_time", ctypes.c_double),
+        ("gyro_noise", ctypes.c_double),
+        ("acc_noise", ctypes.c_double),
+        ("acc_reject", ctypes.c_double),
+        ("acc_tau", ctypes.c_double),
+        ("mag_tau", ctypes.c_double),
+        ("gravity", ctypes.c_double),
+        ("mag_noise", ctypes.c_double),
+        ("mag_norm_tol", ctypes.c_double),
+        ("mag_dip_tol", ctypes.c_double),
+        ("mag_ref_time", ctypes.c_double),
+        ("mag_new_time", ctypes.c_double),
+        ("bias_time", ctypes.c_double),
+        ("bias_max", ctypes.c_double),
+        ("rest_time", ctypes.c_double),
+        ("rest_gyro", ctypes.c_double),
+        ("rest_acc", ctypes.c_double),
+        ("rest_bias_time", ctypes.c_double),
+        ("init_std", ctypes.c_double),
+    ]
+
+    @classmethod
+    def default(cls, sample_time: float) -> "AhrsParams":
+        """The library's tuned defaults for the sample time ``sample_time`` (seconds)."""
+        p = cls()
+        _check(lib().bingham_ahrs_params_default(float(sample_time), ctypes.byref(p)))
+        return p
+
+    def as_dict(self) -> Dict[str, float]:
+        """The parameters as a ``{name: value}`` dictionary."""
+        return {name: getattr(self, name) for name, *_ in self._fields_}
+
+
+def _rows3(a: ArrayLike, name: str, n: Optional[int] = None) -> Array:
+    arr = _in(a, name)
+    if arr.ndim != 2 or arr.shape[1] != 3 or (n is not None and arr.shape[0] != n):
+        want = f"({n if n is not None else 'n'}, 3)"
+        raise ValueError(f"{name} must have shape {want}, got {arr.shape}")
+    return arr
+
+
+class Ahrs:
+    """The Bingham AHRS (gyroscope, accelerometer, optional magnetometer), owning a
+    ``bingham_ahrs`` handle. Orientation q (w, x, y, z) maps sensor to world ENU.
+    Units: rad/s, m/s² (+g up at rest), any magnetometer unit.
+
+    ``Ahrs(sample_time)`` uses the tuned defaults; pass ``params=`` (an :class:`AhrsParams`)
+    or keyword overrides (``Ahrs(0.01, acc_noise=0.8)``) to change them.
+    """
+
+    def __init__(self, sample_time: float, params: Optional[AhrsParams] = None, **overrides: float) -> None:
+        p = AhrsParams.default(sample_time) if params is None else params
+        for k, v in overrides.items():
+            if k not in p.as_dict():
+                raise TypeError(f"unknown AHRS parameter {k!r}")
+            setattr(p, k, float(v))
+        handle = ctypes.c_void_p()
+        _check(lib().bingham_ahrs_new(ctypes.byref(p), ctypes.byref(handle)))
+        self._handle: Optional[ctypes.c_void_p] = handle
+        self.params = p
+
+    def close(self) -> None:
+        """Releases the handle (idempotent)."""
+        if getattr(self, "_handle", None) is not None:
+            lib().bingham_ahrs_free(self._handle)
+            self._handle = None
+
+    def __del__(self) -> None:
+        try:
+            self.close()
+        except Exception:
+            pass
+
+    def __enter__(self) -> "Ahrs":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _h(self) -> ctypes.c_void_p:
+        if self._handle is None:
+            raise ValueError("the AHRS has been closed")
+        return self._handle
+
+    def update(self, gyr: ArrayLike, acc: ArrayLike, mag: Optional[ArrayLike] = None) -> None:
+        """One sample (3-vectors; ``mag`` may be None)."""
+        g = _in(gyr, "gyr", (3,))
+        a = _in(acc, "acc", (3,))
+        m = None if mag is None else _in(mag, "mag", (3,))
+        _check(lib().bingham_ahrs_update(self._h(), _ptr(g), _ptr(a), _ptr(m)))
+
+    def update_batch(
+        self, gyr: ArrayLike, acc: ArrayLike, mag: Optional[ArrayLike] = None, spread: bool = False
+    ) -> Union[Array, Tuple[Array, Array]]:
+        """n samples (n×3 arrays; ``mag`` n×3 or None). Returns the n×4 quaternions after each
+        sample, or ``(quat, spread)`` with the total angular spread (radians, length n) when
+        ``spread`` is true. A refused sample raises :class:`BinghamError` (its message names the
+        sample); the samples before it have been processed."""
+        g = _rows3(gyr, "gyr")
+        n = g.shape[0]
+        a = _rows3(acc, "acc", n)
+        m = None if mag is None else _rows3(mag, "mag", n)
+        q = np.empty((n, 4))
+        s = np.empty(n) if spread else None
+        _check(
+            lib().bingham_ahrs_update_batch_spread(
+                self._h(), n, _ptr(g), _ptr(a), _ptr(m), _ptr(q), _ptr(s)
+            )
+        )
+        if s is not None:
+            return q, s
+        return q
+
+    def quaternion(self) -> Array:
+        """The estimate (w, x, y, z), sensor → world ENU, w ≥ 0."""
+        out = np.empty(4)
+        _check(lib().bingham_ahrs_quaternion(self._h(), _ptr(out)))
+        return out
+
+    def state(self) -> Tuple[Array, Array]:
+        """The Bingham state ``(m, z)`` of the orientation."""
+        m = np.empty((4, 4))
+        z = np.empty(4)
+        _check(lib().bingham_ahrs_state(self._h(), _ptr(m), _ptr(z)))
+        return m, z
+
+    def set_state(self, m: ArrayLike, z: ArrayLike) -> None:
+        """Replaces the orientation estimate by Bingham(m, z) (a known start or a reset)."""
+        m = _in(m, "m", (4, 4))
+        z = _in(z, "z", (4,))
+        _check(lib().bingham_ahrs_set_state(self._h(), _ptr(m), _ptr(z)))
+
+    def angular_spread(self) -> Array:
+        """Angular spread (radians): 3 principal axes, then the total."""
+        out = np.empty(4)
+        _check(lib().bingham_ahrs_angular_spread(self._h(), _ptr(out)))
+        return out
+
+    def gyro_bias(self) -> Array:
+        """The gyroscope bias estimate (rad/s, sensor frame)."""
+        out = np.empty(3)
+        _check(lib().bingham_ahrs_gyro_bias(self._h(), _ptr(out)))
+        return out

@@ -1,0 +1,231 @@
+"""The recursive Bingham filter: :class:`Filter`, owning a ``bingham_filter`` handle (linear
+and nonlinear prediction, measurement updates, likelihoods)."""
+
+from __future__ import annotations
+
+import ctypes
+from typing import Any, Callable, Optional, Tuple
+
+import numpy as np
+
+from ._arrays import Array, ArrayLike, _dist, _in, _ptr
+from ._callback import _Callback
+from .errors import _check
+from ._library import _LOG_LIKELIHOOD_FN, _SIZE, _TRANSITION_FN, lib
+
+__all__ = ["Filter"]
+
+
+class Filter:
+    """The recursive Bingham filter (d = 2: axes as ``(re, im)``; d = 4: unit quaternions,
+    scalar first), owning a ``bingham_filter`` handle.
+
+    System ``x[k+1] = x[k] ⊕ w[k]``, measurement ``z[k] = x[k] ⊕ v[k]`` with Bingham noises
+    given as ``(m, z)`` pairs; nonlinear models ``x[k+1] = a(x[k]) ⊕ w[k]`` and any likelihood
+    through Python callables (:meth:`predict_nonlinear`, :meth:`update_nonlinear`). A failed
+    call raises :class:`BinghamError` and leaves the filter unchanged. Use one filter per
+    thread at a time; :meth:`clone` gives an independent copy.
+    The handle is released by :meth:`close`, by leaving a ``with`` block, or when the object
+    is garbage collected.
+    """
+
+    def __init__(self, m0: ArrayLike, z0: ArrayLike) -> None:
+        d, m0, z0 = _dist(m0, z0, ("m0", "z0"))
+        handle = ctypes.c_void_p()
+        _check(lib().bingham_filter_new(d, _ptr(m0), _ptr(z0), ctypes.byref(handle)))
+        self._handle: Optional[ctypes.c_void_p] = handle
+        self._busy = False
+        self.d = d
+
+    @classmethod
+    def _adopt(cls, handle: ctypes.c_void_p, d: int) -> "Filter":
+        f = cls.__new__(cls)
+        f._handle = handle
+        f._busy = False
+        f.d = d
+        return f
+
+    def _h(self) -> ctypes.c_void_p:
+        if self._handle is None:
+            raise ValueError("the filter has been closed")
+        if self._busy:
+            raise ValueError("the filter is in a nonlinear step: its callback must not use it")
+        return self._handle
+
+    def close(self) -> None:
+        """Releases the handle (idempotent)."""
+        if getattr(self, "_busy", False):
+            raise ValueError("the filter is in a nonlinear step: its callback must not close it")
+        if getattr(self, "_handle", None) is not None:
+            lib().bingham_filter_free(self._handle)
+            self._handle = None
+
+    def __del__(self) -> None:
+        try:
+            self.close()
+        except Exception:  # interpreter shutdown: the library may be gone already
+            pass
+
+    def __enter__(self) -> "Filter":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def clone(self) -> "Filter":
+        """An independent copy (state and cached noise parameters)."""
+        handle = ctypes.c_void_p()
+        _check(lib().bingham_filter_clone(self._h(), ctypes.byref(handle)))
+        return Filter._adopt(handle, self.d)
+
+    def dim(self) -> int:
+        """The dimension as reported by the library (2 or 4)."""
+        d = _SIZE(0)
+        _check(lib().bingham_filter_dim(self._h(), ctypes.byref(d)))
+        return d.value
+
+    def state(self) -> Tuple[Array, Array]:
+        """The estimate ``(m, z)``: z ascending with z[-1] = 0, the last column of m the mode."""
+        m = np.empty((self.d, self.d))
+        z = np.empty(self.d)
+        _check(lib().bingham_filter_get_state(self._h(), _ptr(m), _ptr(z)))
+        return m, z
+
+    def set_state(self, m: ArrayLike, z: ArrayLike) -> None:
+        """Replaces the estimate by Bingham(m, z)."""
+        m = _in(m, "m", (self.d, self.d))
+        z = _in(z, "z", (self.d,))
+        _check(lib().bingham_filter_set_state(self._h(), _ptr(m), _ptr(z)))
+
+    def mode(self) -> Array:
+        """The point estimate (a unit vector; its negative is the same axis / rotation)."""
+        out = np.empty(self.d)
+        _check(lib().bingham_filter_mode(self._h(), _ptr(out)))
+        return out
+
+    def _noise(self, m: ArrayLike, z: ArrayLike, names: Tuple[str, str]) -> Tuple[Array, Array]:
+        return _in(m, names[0], (self.d, self.d)), _in(z, names[1], (self.d,))
+
+    def predict(self, m_w: ArrayLike, z_w: ArrayLike) -> None:
+        """Prediction with process noise Bingham(m_w, z_w)."""
+        m_w, z_w = self._noise(m_w, z_w, ("m_w", "z_w"))
+        _check(lib().bingham_filter_predict(self._h(), _ptr(m_w), _ptr(z_w)))
+
+    def predict_rotation(self, u: ArrayLike, m_w: ArrayLike, z_w: ArrayLike) -> None:
+        """Prediction of ``x ⊕ u ⊕ w`` for a known unit ``u`` (e.g. a gyroscope increment)."""
+        u = _in(u, "u", (self.d,))
+        m_w, z_w = self._noise(m_w, z_w, ("m_w", "z_w"))
+        _check(lib().bingham_filter_predict_rotation(self._h(), _ptr(u), _ptr(m_w), _ptr(z_w)))
+
+    def predict_nonlinear(
+        self, fn: Callable[[Array], ArrayLike], m_w: ArrayLike, z_w: ArrayLike
+    ) -> None:
+        """Nonlinear prediction ``x[k+1] = fn(x[k]) ⊕ w[k]``, w ~ Bingham(m_w, z_w).
+
+        ``fn`` is called once per deterministic sample of the state (19 for d = 4, 3 for d = 2;
+        fewer where the scheme falls back, see :func:`deterministic_samples`) with a unit vector
+        ``x`` (a NumPy array of length d, a copy the callable may keep) and must return a unit
+        vector of length d (any array-like; unit within ``UNIT_TOL``, then normalized). Its sign
+        does not matter, and ``fn(-x) = ±fn(x)`` is the caller's contract (``q`` and ``-q`` are
+        the same rotation). The weighted second moment of the results is composed exactly with
+        the noise and refitted; with ``fn`` the identity this is :meth:`predict`.
+
+        ``fn`` must not use this filter (that raises ``ValueError`` inside it). If ``fn`` raises,
+        or returns a wrong shape or a non-finite or non-unit vector, the filter is unchanged and
+        :class:`BinghamError` with status ``ERR_CALLBACK`` is raised (``from`` the callable's
+        exception, if any: see ``__cause__``).
+        """
+        m_w, z_w = self._noise(m_w, z_w, ("m_w", "z_w"))
+        d = self.d
+        guard = _Callback()
+
+        def call(x_in: Any, x_out: Any) -> None:
+            x = np.ctypeslib.as_array(x_in, shape=(d,)).copy()
+            y = np.ascontiguousarray(fn(x), dtype=np.float64)
+            if y.shape != (d,):
+                raise ValueError(f"the transition must return shape ({d},), got {y.shape}")
+            ctypes.memmove(x_out, y.ctypes.data, d * ctypes.sizeof(ctypes.c_double))
+
+        cb = _TRANSITION_FN(lambda x_in, x_out, _user: guard.run(lambda: call(x_in, x_out)))
+        handle = self._h()
+        self._busy = True
+        try:
+            status = lib().bingham_filter_predict_nonlinear(handle, cb, None, _ptr(m_w), _ptr(z_w))
+        finally:
+            self._busy = False
+        guard.check(status)
+
+    def update_nonlinear(self, log_likelihood: Callable[[Array], float]) -> None:
+        """Nonlinear Bayes update: posterior ∝ prior(x) · L(x), ``log_likelihood(x)`` = log L(x).
+
+        ``log_likelihood`` gets a unit vector ``x`` (a NumPy array of length d, a copy) and
+        returns a finite float; ``L(-x) = L(x)`` is the caller's contract. The update is
+        progressive (tempered): a Bingham exponent is fitted to ``log L`` at the deterministic
+        samples of the current approximation (19 calls per round for d = 4, 5 for d = 2) and
+        multiplied in as ``exp(Δβ xᵀPx)``, with ``Δβ`` such that the part of ``log L`` the fit
+        misses contributes at most ``TEMPERING_RESIDUAL = 1`` per step (a Bingham likelihood is
+        absorbed exactly, in one step), then two importance-weighted moment matches correct the
+        result (at most 200 steps; beyond that ``ERR_NOT_CONVERGED``). Reliable where the
+        posterior is close to a Bingham distribution (one mode up to the sign); for a Bingham
+        likelihood :meth:`update` and :func:`multiply` are exact.
+
+        ``log_likelihood`` must not use this filter. If it raises or returns a non-finite value,
+        the filter is unchanged and :class:`BinghamError` with status ``ERR_CALLBACK`` is raised
+        (``from`` the callable's exception, if any).
+        """
+        d = self.d
+        guard = _Callback()
+
+        def call(x_in: Any, log_l: Any) -> None:
+            x = np.ctypeslib.as_array(x_in, shape=(d,)).copy()
+            log_l[0] = float(log_likelihood(x))
+
+        cb = _LOG_LIKELIHOOD_FN(lambda x_in, log_l, _user: guard.run(lambda: call(x_in, log_l)))
+        handle = self._h()
+        self._busy = True
+        try:
+            status = lib().bingham_filter_update_nonlinear(handle, cb, None)
+        finally:
+            self._busy = False
+        guard.check(status)
+
+    def update(self, measurement: ArrayLike, m_v: ArrayLike, z_v: ArrayLike) -> None:
+        """Measurement update with ``measurement = x ⊕ v``, v ~ Bingham(m_v, z_v)."""
+        meas = _in(measurement, "measurement", (self.d,))
+        m_v, z_v = self._noise(m_v, z_v, ("m_v", "z_v"))
+        _check(lib().bingham_filter_update(self._h(), _ptr(meas), _ptr(m_v), _ptr(z_v)))
+
+    def log_likelihood(self, measurement: ArrayLike, m_v: ArrayLike, z_v: ArrayLike) -> float:
+        """Log predictive density of a measurement (the filter is not changed)."""
+        meas = _in(measurement, "measurement", (self.d,))
+        m_v, z_v = self._noise(m_v, z_v, ("m_v", "z_v"))
+        out = np.empty(1)
+        _check(
+            lib().bingham_filter_log_likelihood(self._h(), _ptr(meas), _ptr(m_v), _ptr(z_v), _ptr(out))
+        )
+        return float(out[0])
+
+    def update_vector(self, body: ArrayLike, reference: ArrayLike, kappa: float) -> None:
+        """Update (d = 4) with a measured direction ``body`` (sensor frame, unit) of the known
+        ``reference`` (world frame, unit), von Mises–Fisher noise of concentration ``kappa``."""
+        b = _in(body, "body", (3,))
+        r = _in(reference, "reference", (3,))
+        _check(lib().bingham_filter_update_vector(self._h(), _ptr(b), _ptr(r), float(kappa)))
+
+    def log_likelihood_vector(self, body: ArrayLike, reference: ArrayLike, kappa: float) -> float:
+        """Log predictive density of a measured direction (d = 4; the filter is not changed)."""
+        b = _in(body, "body", (3,))
+        r = _in(reference, "reference", (3,))
+        out = np.empty(1)
+        _check(
+            lib().bingham_filter_log_likelihood_vector(
+                self._h(), _ptr(b), _ptr(r), float(kappa), _ptr(out)
+            )
+        )
+        return float(out[0])
+
+    def angular_spread(self) -> Array:
+        """The state's angular spread in radians (see :func:`angular_spread`), length d."""
+        out = np.empty(self.d)
+        _check(lib().bingham_filter_angular_spread(self._h(), _ptr(out)))
+        return out
