@@ -193,7 +193,7 @@ fn moments_scheme_coverage_over_random_z() {
 #[test]
 fn jaif_states_get_fourth_moment_sets() {
     use bingham::filter::BinghamFilter;
-    let sc = filter_common::scenario_4d();
+    let sc = testkit::scenarios::scenario_4d();
     let (mut fallback, mut total) = (0, 0);
     let mut check = |f: &BinghamFilter| {
         let s = f.state().deterministic_samples(Scheme::Moments).unwrap();
