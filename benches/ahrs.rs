@@ -9,6 +9,7 @@ use bingham::filter::BinghamFilter;
 use bingham::observation::{noise_from_angle_std, vector_observation};
 use bingham::quaternion::q4;
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use testkit::Rng64;
 
 const DT: f64 = 0.01;
 
@@ -18,27 +19,9 @@ struct Sample {
     mag: [f64; 3],
 }
 
-/// A deterministic pseudo-random generator (SplitMix64) with Gaussian draws.
-struct Rng(u64);
-
-impl Rng {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        let u1 = 1.0 - self.uniform();
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-    }
-}
-
 /// 60 s of simulated IMU data.
 fn stream() -> Vec<Sample> {
-    let mut rng = Rng(7);
+    let mut rng = Rng64(7);
     let mut q = [1.0, 0.0, 0.0, 0.0];
     let bias = [0.008, -0.008, 0.008];
     (0..6000)

@@ -5,15 +5,26 @@
 //! through 10 runs of 100 steps, so the state is in its normal operating range; the noise
 //! parameters are the same arrays every step (the normal case: their moments are cached).
 
-#[path = "../tests/filter_common/mod.rs"]
-mod common;
-
 use bingham::filter::BinghamFilter;
-use common::{scenario_2d, scenario_4d, simulate, Scenario};
+use bingham::quaternion::compose;
+use bingham::Bingham;
 use criterion::{black_box, criterion_group, criterion_main, BatchSize, Criterion};
+use rand::rngs::StdRng;
+use rand::SeedableRng;
+use testkit::scenarios::{scenario_2d, scenario_4d, simulate_with, turn, Scenario, STEPS};
 
+/// The measurements of runs 0..10, as the tests simulate them (`tests/filter_common`): the
+/// library's exact sampler seeded as `bingham_sample` seeds it.
 fn measurements(sc: &Scenario) -> Vec<Vec<f64>> {
-    (0..10).flat_map(|r| simulate(sc, r).1).collect()
+    let draw = |m: &[f64], z: &[f64], seed: u64, n: usize| -> Vec<Vec<f64>> {
+        let b = Bingham::from_row_major(sc.d, m, z).unwrap();
+        let x = b.sample(&mut StdRng::seed_from_u64(seed), n);
+        x.iter().map(|v| v.as_slice().to_vec()).collect()
+    };
+    let compose = |x: &[f64], y: &[f64]| compose(x, y).unwrap();
+    (0..10)
+        .flat_map(|r| simulate_with(sc, r, draw, compose).1)
+        .collect()
 }
 
 fn bench_step(c: &mut Criterion, name: &str, sc: &Scenario) {
@@ -24,7 +35,7 @@ fn bench_step(c: &mut Criterion, name: &str, sc: &Scenario) {
     let mut k = 0usize;
     g.bench_function(format!("{name} predict+update"), |b| {
         b.iter(|| {
-            if k % common::STEPS == 0 {
+            if k % STEPS == 0 {
                 f = fresh();
             }
             let z = &meas[k % meas.len()];
@@ -96,7 +107,7 @@ fn bench_predict(c: &mut Criterion, name: &str, sc: &Scenario) {
         b.iter_batched(
             || f.clone(),
             |mut h| {
-                h.predict_nonlinear(common::turn, black_box(&sc.mw), black_box(&sc.zw))
+                h.predict_nonlinear(turn, black_box(&sc.mw), black_box(&sc.zw))
                     .unwrap();
                 h
             },

@@ -11,19 +11,14 @@ use std::hint::black_box;
 
 use bingham::special::{bessel_q, i01e};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use testkit::Lcg;
 
 const N: usize = 1024;
 
 /// Deterministic uniform numbers in [0, 1).
-fn uniform(n: usize, mut state: u64) -> Vec<f64> {
-    (0..n)
-        .map(|_| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        })
-        .collect()
+fn uniform(n: usize, seed: u64) -> Vec<f64> {
+    let mut r = Lcg(seed);
+    (0..n).map(|_| r.uniform()).collect()
 }
 
 fn sets() -> Vec<(&'static str, Vec<f64>)> {

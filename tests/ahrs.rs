@@ -6,12 +6,10 @@
 //! Parameters are `AhrsParams::new(dt)` defaults throughout; the bounds carry a margin of at
 //! least 2× over what was measured when the test was written (printed with `--nocapture`).
 
-mod common;
-
 use bingham::ahrs::{Ahrs, AhrsParams};
 use bingham::Error;
-use common::{rot, Rng64};
 use std::f64::consts::PI;
+use testkit::{rot, Rng64};
 
 const G: f64 = 9.81;
 /// The magnetic field in the world frame (ENU, µT): north and down.

@@ -5,14 +5,13 @@
 use bingham::deterministic::{max_count, DeterministicSamples, Reproduced, Scheme};
 use bingham::normalization::evaluate;
 use bingham::{Bingham, Method};
+use testkit::{xorshift_uniform, Rng64};
 
-mod common;
-#[path = "filter_common/mod.rs"]
 mod filter_common;
 
 /// A Haar-random orthogonal matrix (row-major) from the shared test generator.
 fn orthogonal(d: usize, seed: u64) -> Vec<f64> {
-    let q = common::Rng64(seed).orthogonal(d);
+    let q = Rng64(seed).orthogonal(d);
     (0..d * d).map(|k| q[(k / d, k % d)]).collect()
 }
 
@@ -157,13 +156,7 @@ fn tac2016_reproduces_the_second_moment() {
 /// every moment-matched set reproduces its moments.
 #[test]
 fn moments_scheme_coverage_over_random_z() {
-    let mut s = 0x5eed_u64;
-    let mut uniform = || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut uniform = xorshift_uniform(0x5eed);
     for d in [2usize, 3, 4] {
         let n = 2000;
         let mut fallback = 0;
@@ -200,7 +193,7 @@ fn moments_scheme_coverage_over_random_z() {
 #[test]
 fn jaif_states_get_fourth_moment_sets() {
     use bingham::filter::BinghamFilter;
-    let sc = filter_common::scenario_4d();
+    let sc = testkit::scenarios::scenario_4d();
     let (mut fallback, mut total) = (0, 0);
     let mut check = |f: &BinghamFilter| {
         let s = f.state().deterministic_samples(Scheme::Moments).unwrap();

@@ -4,10 +4,8 @@
 //! doubles; each path gives bit-identical results on repeated calls and on other threads; and
 //! the default evaluation uses the detected path.
 
-mod common;
-
 use bingham::normalization::{log_f_with_path, log_normalization_into, Method, Path};
-use common::Rng64;
+use testkit::Rng64;
 
 /// log F, ω and H (input order) on one path.
 fn eval(z: &[f64], path: Path) -> (f64, Vec<f64>, Vec<f64>) {

@@ -1,14 +1,12 @@
 //! Density, moments, entropy, KL, multiply, compose, rotate and the sampler, checked against
 //! Monte Carlo (with tolerances derived from n), pointwise density identities and invariants.
 
-mod common;
-
 use bingham::quaternion::compose as qmul;
 use bingham::Bingham;
-use common::{rel, Rng64};
 use nalgebra::{DMatrix, DVector};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
+use testkit::{rel, Rng64};
 
 fn bingham(rng: &mut Rng64, z: &[f64]) -> Bingham {
     Bingham::new(rng.orthogonal(z.len()), DVector::from_column_slice(z)).unwrap()

@@ -13,6 +13,7 @@ use nalgebra::{DMatrix, DVector};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use std::f64::consts::PI;
+use testkit::scenarios::{normalized, scenario_2d, scenario_4d, Scenario};
 
 fn random_rotation(rng: &mut StdRng, d: usize) -> DMatrix<f64> {
     let g = DMatrix::from_fn(d, d, |_, _| rng.gen::<f64>() - 0.5);

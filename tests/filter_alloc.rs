@@ -7,9 +7,10 @@ mod filter_common;
 use bingham::ffi::bingham_status;
 use bingham::ffi::filter::*;
 use bingham::filter::BinghamFilter;
-use filter_common::{scenario_2d, scenario_4d, simulate, Scenario};
+use filter_common::simulate;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
+use testkit::scenarios::{normalized, scenario_2d, scenario_4d, turn, Scenario};
 
 /// Counts every allocation and reallocation of this process.
 struct Counting;
@@ -153,7 +154,7 @@ fn nonlinear_steps(sc: &Scenario) {
     let meas: Vec<Vec<f64>> = (0..2).flat_map(|r| simulate(sc, r).1).collect();
     let d = sc.d;
     let mut f = BinghamFilter::new(d, &sc.m0, &sc.z0).unwrap();
-    let transition = filter_common::turn;
+    let transition = turn;
     f.predict_nonlinear(transition, &sc.mw, &sc.zw).unwrap(); // warm-up: the noise cache
     let before = allocations();
     let mut calls = 0usize;
@@ -189,7 +190,7 @@ fn nonlinear_steps(sc: &Scenario) {
 
 fn rust_api(sc: &Scenario) {
     let meas: Vec<Vec<f64>> = (0..3).flat_map(|r| simulate(sc, r).1).collect();
-    let u = filter_common::normalized(&vec![1.0; sc.d]);
+    let u = normalized(&vec![1.0; sc.d]);
     let mut f = BinghamFilter::new(sc.d, &sc.m0, &sc.z0).unwrap();
     // warm-up: fills the noise caches
     f.predict(&sc.mw, &sc.zw).unwrap();

@@ -12,10 +12,9 @@
 //! * the high-precision files `tests/data/normalization_d{5..8}.csv`, when present;
 //! * identities: `Σ ω = 1`, permutation and shift invariance, symmetric Hessian with zero row sums.
 
-mod common;
-
 use bingham::normalization::{evaluate, log_normalization_into, Method};
 use std::f64::consts::PI;
+use testkit::{read_reference, xorshift_uniform};
 
 /// `log |S^{d−1}|` by the recursion `|S^{d−1}| = 2π/(d−2)·|S^{d−3}|`.
 fn log_sphere_area(d: usize) -> f64 {
@@ -337,13 +336,7 @@ fn huge_and_mixed_scales_against_nested_sphere_quadrature() {
 
 #[test]
 fn omega_sums_to_one_and_invariances() {
-    let mut seed = 0x2545_F491_4F6C_DD1Du64;
-    let mut rnd = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rnd = xorshift_uniform(0x2545_F491_4F6C_DD1D);
     for d in [5, 6, 7, 8, 11, 16, 31, 64] {
         for _ in 0..4 {
             let z: Vec<f64> = (0..d)
@@ -376,7 +369,7 @@ fn omega_sums_to_one_and_invariances() {
 #[test]
 fn high_precision_reference_files_d5_to_d8() {
     for d in 5..=8 {
-        let rows = common::read_reference(d);
+        let rows = read_reference(d);
         let (mut ef, mut ew, mut eh) = (0.0f64, 0.0f64, 0.0f64);
         for r in &rows {
             let e = evaluate(&r.z, Method::Exact, !r.hess.is_empty()).unwrap();

@@ -16,13 +16,12 @@
 //! Steps per scenario and dimension: `BINGHAM_LONG_STEPS` (default 10⁴ in `cargo test`;
 //! `make long` runs 10⁶).
 
-mod fuzz_common;
-
 use std::time::Instant;
 
 use bingham::filter::{BinghamFilter, MAX_CONCENTRATION};
 use bingham::quaternion::compose;
-use fuzz_common::{check_state, check_unit, env_count, identity, norm, unit_vector, Rng};
+use testkit::fuzz::{check_state, check_unit, env_count, identity};
+use testkit::{norm, Rng64};
 
 fn steps() -> u64 {
     env_count("BINGHAM_LONG_STEPS", 10_000)
@@ -36,7 +35,7 @@ fn noise(d: usize, k: f64) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// A unit vector within angle ~`s` of `x` (either sign).
-fn near(rng: &mut Rng, x: &[f64], s: f64) -> Vec<f64> {
+fn near(rng: &mut Rng64, x: &[f64], s: f64) -> Vec<f64> {
     let v: Vec<f64> = x.iter().map(|c| c + s * rng.normal()).collect();
     let n = norm(&v);
     v.iter().map(|c| c / n).collect()
@@ -162,8 +161,8 @@ fn sharp(d: usize, with_predict: bool) {
             "updates only"
         }
     );
-    let mut rng = Rng::new(1000 + d as u64 + 10 * u64::from(with_predict));
-    let truth = unit_vector(&mut rng, d);
+    let mut rng = Rng64::new(1000 + d as u64 + 10 * u64::from(with_predict));
+    let truth = rng.unit_vector(d);
     let mut run = Run::new(&label, d, &identity(d), &vec![-1.0; d]);
     let v = noise(d, 1e8); // angular sd ~ 7e-5
     let w = noise(d, 1e12); // tiny process noise
@@ -198,7 +197,7 @@ fn sharp(d: usize, with_predict: bool) {
 fn near_uniform(d: usize) {
     let start = Instant::now();
     let label = format!("near_uniform d={d}");
-    let mut rng = Rng::new(2000 + d as u64);
+    let mut rng = Rng64::new(2000 + d as u64);
     let mut run = Run::new(&label, d, &identity(d), &vec![0.0; d]);
     let n = steps();
     for k in 0..n {
@@ -210,7 +209,7 @@ fn near_uniform(d: usize) {
         };
         run.predict(k, &w);
         let v = noise(d, rng.log_uniform(-9.0, -2.0));
-        let y = unit_vector(&mut rng, d);
+        let y = rng.unit_vector(d);
         run.update(k, &y, &v);
         assert!(
             run.z[0] > -1.0,
@@ -226,7 +225,7 @@ fn near_uniform(d: usize) {
 fn antipodal_orthogonal(d: usize) {
     let start = Instant::now();
     let label = format!("antipodal_orthogonal d={d}");
-    let mut rng = Rng::new(3000 + d as u64);
+    let mut rng = Rng64::new(3000 + d as u64);
     let mut run = Run::new(&label, d, &identity(d), &vec![-10.0; d]);
     let n = steps();
     for k in 0..n {
@@ -257,7 +256,7 @@ fn antipodal_orthogonal(d: usize) {
 fn alternating(d: usize) {
     let start = Instant::now();
     let label = format!("alternating d={d}");
-    let mut rng = Rng::new(4000 + d as u64);
+    let mut rng = Rng64::new(4000 + d as u64);
     let mut truth = truth0(d);
     let mut run = Run::new(&label, d, &identity(d), &vec![-1.0; d]);
     let n = steps();
@@ -285,7 +284,7 @@ fn alternating(d: usize) {
         let y = if rng.chance(0.5) {
             near(&mut rng, &truth, 1e-3)
         } else {
-            unit_vector(&mut rng, d)
+            rng.unit_vector(d)
         };
         check_unit(&y, 1e-12).unwrap();
         run.update(k, &y, &noise(d, kv));

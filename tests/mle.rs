@@ -1,11 +1,9 @@
 //! MLE round trips: for Z across the supported range (ties included) and a random rotation M,
 //! the MLE of S(M, Z) returns Z and reproduces S.
 
-mod common;
-
 use bingham::{mle_from_samples, mle_from_second_moment, Bingham};
-use common::{rel, Rng64};
 use nalgebra::{DMatrix, DVector};
+use testkit::{rel, Rng64};
 
 fn round_trip(m: DMatrix<f64>, z: &[f64]) -> (f64, f64) {
     let d = z.len();

@@ -11,8 +11,7 @@ use nalgebra::{DMatrix, DVector};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 
-mod common;
-use common::Rng64;
+use testkit::{rel, Rng64};
 
 fn row_major(m: &DMatrix<f64>) -> Vec<f64> {
     let d = m.nrows();
@@ -101,7 +100,7 @@ fn identity_dynamics_equals_the_linear_prediction() {
         .unwrap();
         let (a, b) = (lin.state(), non.state());
         let zerr = (0..d)
-            .map(|i| common::rel(b.z()[i], a.z()[i], 1e-300))
+            .map(|i| rel(b.z()[i], a.z()[i], 1e-300))
             .fold(0.0, f64::max);
         let dot = a.mode().dot(&b.mode()).abs();
         println!(
@@ -134,7 +133,7 @@ fn tac2016_identity_refit_exact_and_with_saddlepoint_moments() {
         };
         let zerr = |c: &Bingham| {
             (0..3)
-                .map(|i| common::rel(c.z()[i], b.z()[i], 1e-300))
+                .map(|i| rel(c.z()[i], b.z()[i], 1e-300))
                 .fold(0.0, f64::max)
         };
         let ours = b.deterministic_samples(Scheme::Moments).unwrap();
@@ -652,7 +651,7 @@ fn bingham_likelihood_update_is_the_exact_product() {
         .unwrap();
         let ours = f.state();
         let zerr = (0..3)
-            .map(|i| common::rel(ours.z()[i], exact.z()[i], 1e-300))
+            .map(|i| rel(ours.z()[i], exact.z()[i], 1e-300))
             .fold(0.0, f64::max);
         let mode_err = angle(ours.mode().as_slice(), exact.mode().as_slice());
         let mc = monte_carlo_posterior(&prior, &log_l, 200_000, 900 + k as u64);

@@ -1,10 +1,8 @@
 //! The normalization constant against independent references: 65-digit values computed
 //! offline (`scripts/reference_normalization.py`), brute-force sphere quadrature, and identities.
 
-mod common;
-
 use bingham::normalization::{evaluate, log_normalization_into, Method};
-use common::{read_reference, rel, Rng64};
+use testkit::{gauss_legendre, read_reference, rel, Rng64};
 
 /// Checks every reference row of dimension d; returns (max rel err of F, max rel err of ω).
 fn check_reference(d: usize) -> (f64, f64) {
@@ -212,33 +210,6 @@ fn brute_force_d3(z: &[f64]) -> (f64, [f64; 3]) {
         }
     }
     (f, [m[0] / f, m[1] / f, m[2] / f])
-}
-
-/// Gauss–Legendre on [-1, 1] by Newton's method (test-only, independent of the library's).
-fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut x = vec![0.0; n];
-    let mut w = vec![0.0; n];
-    for i in 0..n {
-        let mut r = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, r);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * r * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            let dp = n as f64 * (r * p1 - p0) / (r * r - 1.0);
-            let dx = p1 / dp;
-            r -= dx;
-            if dx.abs() < 1e-16 {
-                let dp2 = dp;
-                w[i] = 2.0 / ((1.0 - r * r) * dp2 * dp2);
-                break;
-            }
-        }
-        x[i] = r;
-    }
-    (x, w)
 }
 
 #[test]

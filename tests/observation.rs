@@ -1,106 +1,28 @@
-//! Vector observations, rotation noise, angular spread and the `q4` quaternion helpers, each
-//! against an independent reference written here (never against the crate's own formulas):
-//! the rotation matrix from the textbook quaternion formula, nalgebra's symmetric
-//! eigensolver, Monte Carlo integrals over the crate's exact sampler and over Gaussian rotation
-//! vectors, and Gauss–Legendre quadratures (nodes computed here by Newton's method).
-
-mod common;
+//! Vector observations, rotation noise and angular spread, each against an independent reference
+//! written here or in `testkit` (never against the crate's own formulas): the rotation matrix
+//! from the textbook quaternion formula, nalgebra's symmetric eigensolver, Monte Carlo integrals
+//! over the crate's exact sampler and over Gaussian rotation vectors, and Gauss–Legendre
+//! quadratures (nodes computed by Newton's method). The `q4` quaternion helpers are tested in
+//! `tests/q4.rs`.
 
 use bingham::filter::BinghamFilter;
 use bingham::observation::{
     angular_spread, davenport_matrix, log_vmf_normalizer_s2, noise_from_angle_std,
     spread_from_omega, vector_observation,
 };
-use bingham::quaternion::{compose, q4};
 use bingham::{Bingham, Error};
-use common::{rot, Rng64};
 use nalgebra::{DMatrix, DVector, Matrix4};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use std::f64::consts::PI;
+use testkit::{dist3, dot3, gauss_legendre, matvec, rot, Rng64};
 
 // ---------------------------------------------------------------------------------------------
 // Independent references
 
-fn matvec(r: &[[f64; 3]; 3], v: &[f64; 3]) -> [f64; 3] {
-    [
-        r[0][0] * v[0] + r[0][1] * v[1] + r[0][2] * v[2],
-        r[1][0] * v[0] + r[1][1] * v[1] + r[1][2] * v[2],
-        r[2][0] * v[0] + r[2][1] * v[1] + r[2][2] * v[2],
-    ]
-}
-
-fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn dist3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
 /// `rᵀ R(q) b`.
 fn direct(q: &[f64; 4], b: &[f64; 3], r: &[f64; 3]) -> f64 {
     dot3(r, &matvec(&rot(q), b))
-}
-
-fn unit3(rng: &mut Rng64) -> [f64; 3] {
-    let v = [rng.normal(), rng.normal(), rng.normal()];
-    let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    [v[0] / n, v[1] / n, v[2] / n]
-}
-
-fn unit4(rng: &mut Rng64) -> [f64; 4] {
-    let v = [rng.normal(), rng.normal(), rng.normal(), rng.normal()];
-    let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    [v[0] / n, v[1] / n, v[2] / n, v[3] / n]
-}
-
-/// Rodrigues' formula: `v` rotated about the axis of `w` by the angle `|w|`.
-fn rodrigues(w: &[f64; 3], v: &[f64; 3]) -> [f64; 3] {
-    let th = dot3(w, w).sqrt();
-    if th == 0.0 {
-        return *v;
-    }
-    let k = [w[0] / th, w[1] / th, w[2] / th];
-    let kxv = [
-        k[1] * v[2] - k[2] * v[1],
-        k[2] * v[0] - k[0] * v[2],
-        k[0] * v[1] - k[1] * v[0],
-    ];
-    let kv = dot3(&k, v);
-    let (s, c) = th.sin_cos();
-    [
-        v[0] * c + kxv[0] * s + k[0] * kv * (1.0 - c),
-        v[1] * c + kxv[1] * s + k[1] * kv * (1.0 - c),
-        v[2] * c + kxv[2] * s + k[2] * kv * (1.0 - c),
-    ]
-}
-
-/// Gauss–Legendre nodes and weights on [−1, 1] (Newton on the three-term recurrence).
-fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut x = vec![0.0; n];
-    let mut w = vec![0.0; n];
-    for i in 0..n {
-        let mut t = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut dp = 0.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, t);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * t * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n as f64 * (t * p1 - p0) / (t * t - 1.0);
-            let dt = p1 / dp;
-            t -= dt;
-            if dt.abs() < 1e-16 {
-                break;
-            }
-        }
-        x[i] = t;
-        w[i] = 2.0 / ((1.0 - t * t) * dp * dp);
-    }
-    (x, w)
 }
 
 /// `∫_a^b f` by composite Gauss–Legendre (`panels` panels of `n` nodes).
@@ -158,7 +80,11 @@ fn davenport_matrix_is_the_direct_evaluation() {
     let mut worst = 0.0f64;
     let mut worst_eig = 0.0f64;
     for _ in 0..200 {
-        let (b, r, q) = (unit3(&mut rng), unit3(&mut rng), unit4(&mut rng));
+        let (b, r, q) = (
+            rng.unit_array::<3>(),
+            rng.unit_array::<3>(),
+            rng.unit_array::<4>(),
+        );
         let k = davenport_matrix(&b, &r);
         let mut qkq = 0.0;
         for i in 0..4 {
@@ -190,7 +116,7 @@ fn vector_observation_is_the_vmf_likelihood() {
     let mut rng = Rng64(12);
     for kappa in [0.0, 0.3, 3.0, 100.0, 1e6] {
         for _ in 0..20 {
-            let (b, r) = (unit3(&mut rng), unit3(&mut rng));
+            let (b, r) = (rng.unit_array::<3>(), rng.unit_array::<3>());
             let obs = vector_observation(&b, &r, kappa).unwrap();
             assert_eq!(obs.dim(), 4);
             let z: Vec<f64> = obs.z().iter().copied().collect();
@@ -204,7 +130,7 @@ fn vector_observation_is_the_vmf_likelihood() {
             // The exponent is κ rᵀR(q)b up to the shift −κ.
             let p = precision(&obs);
             for _ in 0..10 {
-                let q = unit4(&mut rng);
+                let q = rng.unit_array::<4>();
                 let qv = DVector::from_column_slice(&q);
                 let e = (qv.transpose() * &p * &qv)[(0, 0)];
                 let want = kappa * direct(&q, &b, &r) - kappa;
@@ -283,7 +209,7 @@ fn update_vector_is_the_bayes_product() {
     for seed in 0..10 {
         let state = test_state(100 + seed);
         for kappa in [0.5, 3.0, 50.0] {
-            let (b, r) = (unit3(&mut rng), unit3(&mut rng));
+            let (b, r) = (rng.unit_array::<3>(), rng.unit_array::<3>());
             let mut f = BinghamFilter::from_bingham(&state).unwrap();
             f.update_vector(&b, &r, kappa).unwrap();
             let got = f.state();
@@ -374,7 +300,7 @@ fn log_likelihood_vector_against_monte_carlo() {
     let rm = rot(&qm);
     let b_mode = [rm[2][0], rm[2][1], rm[2][2]]; // R(q)ᵀ r
     let mut dirs = vec![b_mode];
-    dirs.extend((0..5).map(|_| unit3(&mut dir)));
+    dirs.extend((0..5).map(|_| dir.unit_array::<3>()));
     for b in &dirs {
         let ll = f.log_likelihood_vector(b, &r, kappa).unwrap();
         let (p, se) = predictive_mc(&samples, b, &r, kappa);
@@ -714,103 +640,4 @@ fn angular_spread_d2_against_monte_carlo() {
         "uniform total {}",
         out[3]
     );
-}
-
-// ---------------------------------------------------------------------------------------------
-// q4 helpers
-
-#[test]
-fn q4_mul_and_rotate() {
-    let mut rng = Rng64(71);
-    for _ in 0..200 {
-        let (a, b) = (unit4(&mut rng), unit4(&mut rng));
-        let m = q4::mul(&a, &b);
-        let c = compose(&a, &b).unwrap();
-        for i in 0..4 {
-            assert!((m[i] - c[i]).abs() < 1e-15, "{m:?} vs {c:?}");
-        }
-        // R(a ⊗ b) = R(a) R(b), conj inverts.
-        let v = unit3(&mut rng);
-        let r1 = matvec(&rot(&m), &v);
-        let r2 = matvec(&rot(&a), &matvec(&rot(&b), &v));
-        assert!(dist3(&r1, &r2) < 1e-14);
-        let rv = q4::rotate(&a, &v);
-        assert!(dist3(&rv, &matvec(&rot(&a), &v)) < 1e-14, "rotate");
-        let back = q4::rotate_inverse(&a, &rv);
-        assert!(dist3(&back, &v) < 1e-14, "rotate_inverse");
-        let id = q4::mul(&a, &q4::conj(&a));
-        assert!((id[0] - 1.0).abs() < 1e-15 && id[1..].iter().all(|x| x.abs() < 1e-15));
-        // Non-unit vectors scale linearly.
-        let v5 = [5.0 * v[0], 5.0 * v[1], 5.0 * v[2]];
-        let r5 = q4::rotate(&a, &v5);
-        assert!(dist3(&r5, &matvec(&rot(&a), &v5)) < 1e-13);
-    }
-}
-
-#[test]
-fn q4_rotation_vectors() {
-    let mut rng = Rng64(72);
-    let mut angles = vec![
-        0.0, 1e-15, 1e-12, 1e-9, 1e-5, 0.99e-4, 1e-4, 1.01e-4, 0.1, 1.0, 2.0, 3.0,
-    ];
-    angles.extend([PI - 1e-3, PI - 1e-6, PI - 1e-9]);
-    for &th in &angles {
-        for _ in 0..10 {
-            let k = unit3(&mut rng);
-            let w = [th * k[0], th * k[1], th * k[2]];
-            let q = q4::from_rotation_vector(&w);
-            let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-            assert!((n - 1.0).abs() < 1e-15, "|q| = {n}");
-            // Against Rodrigues' formula.
-            let v = unit3(&mut rng);
-            let e = dist3(&q4::rotate(&q, &v), &rodrigues(&w, &v));
-            assert!(e < 1e-14, "θ = {th}: rotation differs by {e}");
-            // Round trip, relative to the angle (tiny angles keep their digits).
-            let back = q4::to_rotation_vector(&q);
-            let e = dist3(&back, &w);
-            assert!(e <= 1e-15 * th, "θ = {th}: {w:?} -> {back:?} ({e:e})");
-            // −q is the same rotation.
-            let neg = q4::to_rotation_vector(&[-q[0], -q[1], -q[2], -q[3]]);
-            assert!(dist3(&neg, &back) <= 1e-15 * th, "−q: {neg:?}");
-        }
-    }
-    // Beyond π the returned rotation vector is the equivalent one with angle 2π − θ.
-    let k = [0.0, 0.6, 0.8];
-    let th = PI + 0.1;
-    let q = q4::from_rotation_vector(&[th * k[0], th * k[1], th * k[2]]);
-    let back = q4::to_rotation_vector(&q);
-    let want = [-(PI - 0.1) * k[0], -(PI - 0.1) * k[1], -(PI - 0.1) * k[2]];
-    assert!(dist3(&back, &want) < 1e-13, "{back:?}");
-    // Exactly π about x: w = cos(π/2) ≈ 6e-17.
-    let back = q4::to_rotation_vector(&q4::from_rotation_vector(&[PI, 0.0, 0.0]));
-    assert!(dist3(&back, &[PI, 0.0, 0.0]) < 1e-14, "{back:?}");
-}
-
-#[test]
-fn q4_from_matrix() {
-    let mut rng = Rng64(73);
-    let mut qs: Vec<[f64; 4]> = (0..200).map(|_| unit4(&mut rng)).collect();
-    // Each branch: the largest component first, second, third, fourth; rotations by π.
-    for i in 0..4 {
-        let mut q = [0.1, -0.2, 0.15, 0.05];
-        q[i] = 0.95;
-        let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-        qs.push([q[0] / n, q[1] / n, q[2] / n, q[3] / n]);
-        let mut e = [0.0; 4];
-        e[i] = 1.0;
-        qs.push(e);
-    }
-    qs.push([0.0, 0.6, 0.8, 0.0]);
-    qs.push([0.0, 0.0, 0.6, -0.8]);
-    for q in &qs {
-        let got = q4::from_matrix(&rot(q));
-        let s = if got.iter().zip(q).map(|(a, b)| a * b).sum::<f64>() < 0.0 {
-            -1.0
-        } else {
-            1.0
-        };
-        for i in 0..4 {
-            assert!((s * got[i] - q[i]).abs() < 1e-14, "{q:?} -> {got:?}");
-        }
-    }
 }

@@ -4,13 +4,12 @@
 //! across threads; handles may move between threads; and the last error message is per thread
 //! (one thread's failures are never visible in another).
 
-mod fuzz_common;
-
 use std::sync::{Arc, Barrier};
 
 use bingham::ffi::bingham_status::*;
 use bingham::ffi::*;
-use fuzz_common::{identity, last_error, mix, orthogonal, unit_vector, z_moderate, Rng};
+use testkit::fuzz::{env_count, identity, orthogonal, read_message, z_moderate};
+use testkit::{mix, norm, Rng64};
 
 const THREADS: usize = 8;
 
@@ -29,6 +28,14 @@ impl Handle {
     fn get(self) -> *mut bingham_filter {
         self.0
     }
+}
+
+/// This thread's last error message.
+fn last_error() -> String {
+    // SAFETY: the length query (NULL buffer, len 0), then a buffer of the length it gave.
+    read_message(|buf, len, n| unsafe {
+        bingham_last_error_message(buf, len, n);
+    })
 }
 
 fn new_filter(d: usize, m: &[f64], z: &[f64]) -> Handle {
@@ -56,7 +63,7 @@ fn get_state(h: Handle, d: usize) -> Vec<f64> {
 /// stepped with predicts, rotations and updates, plus stateless calls (log F, MLE, sampling,
 /// products), everything recorded bit for bit, including the statuses.
 fn transcript(seed: u64, steps: usize) -> Vec<u64> {
-    let mut rng = Rng::new(mix(seed));
+    let mut rng = Rng64::new(mix(seed));
     let mut out = Vec::new();
     for d in [2usize, 4] {
         let h = new_filter(d, &orthogonal(&mut rng, d), &z_moderate(&mut rng, d));
@@ -72,14 +79,14 @@ fn transcript(seed: u64, steps: usize) -> Vec<u64> {
         for k in 0..steps {
             let (mw, zw) = &noises[rng.below(3)];
             let (mv, zv) = &noises[rng.below(3)];
-            let y = unit_vector(&mut rng, d);
+            let y = rng.unit_vector(d);
             // SAFETY: live handle (this thread only); arrays of lengths d, d*d, d.
             let st = unsafe {
                 if k % 4 == 3 {
                     let mut u = vec![0.0; d];
                     u[0] = 1.0;
                     u[1] = 0.01 * rng.normal();
-                    let n = fuzz_common::norm(&u);
+                    let n = norm(&u);
                     u.iter_mut().for_each(|x| *x /= n);
                     bingham_filter_predict_rotation(h.0, u.as_ptr(), mw.as_ptr(), zw.as_ptr())
                 } else {
@@ -133,7 +140,7 @@ fn transcript(seed: u64, steps: usize) -> Vec<u64> {
 }
 
 fn steps() -> usize {
-    fuzz_common::env_count("BINGHAM_THREAD_STEPS", 300) as usize
+    env_count("BINGHAM_THREAD_STEPS", 300) as usize
 }
 
 #[test]
@@ -177,10 +184,10 @@ fn eight_threads_match_a_single_thread_bit_for_bit() {
 #[test]
 fn read_only_calls_share_a_handle() {
     let d = 4;
-    let mut rng = Rng::new(7);
+    let mut rng = Rng64::new(7);
     let h = new_filter(d, &orthogonal(&mut rng, d), &[-50.0, -20.0, -5.0, 0.0]);
     let (mv, zv) = (identity(d), vec![0.0, -100.0, -100.0, -100.0]);
-    let ys: Vec<Vec<f64>> = (0..64).map(|_| unit_vector(&mut rng, d)).collect();
+    let ys: Vec<Vec<f64>> = (0..64).map(|_| rng.unit_vector(d)).collect();
     let single: Vec<u64> = ys
         .iter()
         .map(|y| {

@@ -4,11 +4,9 @@
 //! (`tests/data/normalization_extreme.csv`, written by `scripts/reference_normalization.py
 //! --extreme`).
 
-mod common;
-
 use bingham::error::Error;
 use bingham::normalization::{evaluate, Method};
-use common::{rel, Rng64};
+use testkit::{rel, Rng64};
 
 /// A magnitude log-uniform in [1e-300, 1e308].
 fn magnitude(rng: &mut Rng64) -> f64 {

@@ -1,0 +1,533 @@
+//! The AHRS: random sample streams.
+//!
+//! One case is an AHRS (sample time sometimes hostile) fed a simulated IMU stream through
+//! bingham_ahrs_update and the batch functions, with hostile samples mixed in (NaN/Inf, zero and
+//! huge vectors, subnormals, NULL and misaligned pointers, a NaN in the middle of a batch) and
+//! bingham_ahrs_set_state calls (valid starts near the truth, any orthogonal M, huge / tiny /
+//! repeated z, z spanning more than a double, non-orthogonal M, NaN/Inf), and a twin that
+//! receives only the calls that were accepted. After every call: a refused call leaves the AHRS
+//! bit-for-bit unchanged (quaternion, state, bias, spread, and the hidden state, through the
+//! twin) and the message names the function (and for a batch the sample); accepted calls leave a
+//! unit quaternion with w ≥ 0, a valid Bingham state, finite bias and spread; after set_state
+//! the state is the normalized Bingham(M, z) and the quaternion ± its mode.
+
+use bingham::ffi::bingham_status::*;
+use bingham::ffi::*;
+use testkit::fuzz::{check_unit, non_finite, Buf};
+use testkit::Rng64;
+
+use crate::ahrs_inputs::{
+    ahrs_bits, ahrs_sentinel, ahrs_state_args, ahrs_state_expected, check_set_state, spoil_sample,
+    Imu,
+};
+use crate::drivers::{cases_for, run_sequences, SHARE_AHRS};
+use crate::status::{check_error_message, last_error, prime_last_error, status_name};
+use crate::vectors::expect;
+
+fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
+    let mut rng = Rng64::new(seed);
+    let mut calls = 0u64;
+    // --- parameters and creation, sometimes hostile (only sample_time is set by hand: the other
+    // fields of bingham_ahrs_params may change)
+    let dt = match rng.below(10) {
+        0 => *rng.pick(&[0.0, -0.01, f64::NAN, f64::INFINITY, -f64::INFINITY]),
+        1 => *rng.pick(&[1e-300, 5e-324, 1e-6, 10.0, 1e10, f64::MAX]),
+        _ => *rng.pick(&[0.01, 0.005, 1.0 / 400.0, 0.02]),
+    };
+    let valid_dt = (1e-6..=1e3).contains(&dt);
+    // SAFETY (all calls below): live handles and buffers of the documented lengths, or NULL /
+    // misaligned pointers that must be refused before any access.
+    let mut p: bingham_ahrs_params = unsafe { std::mem::zeroed() };
+    let raw = |p: &bingham_ahrs_params| -> Vec<u8> {
+        // SAFETY: a plain struct of doubles.
+        unsafe {
+            std::slice::from_raw_parts(
+                (p as *const bingham_ahrs_params).cast::<u8>(),
+                std::mem::size_of::<bingham_ahrs_params>(),
+            )
+        }
+        .to_vec()
+    };
+    let before = raw(&p);
+    prime_last_error("bingham_ahrs_params_default");
+    let st = unsafe { bingham_ahrs_params_default(dt, &mut p) };
+    calls += 1;
+    if valid_dt != (st == BINGHAM_OK) || (!valid_dt && st != BINGHAM_ERR_INVALID_ARGUMENT) {
+        return Err(format!("params_default({dt:e}): {}", status_name(st)));
+    }
+    if st != BINGHAM_OK {
+        if raw(&p) != before {
+            return Err("params_default wrote on error".into());
+        }
+        check_error_message("bingham_ahrs_params_default")?;
+        // defaults for another period, then the hostile sample_time by hand
+        let st = unsafe { bingham_ahrs_params_default(0.01, &mut p) };
+        if st != BINGHAM_OK {
+            return Err(format!("params_default(0.01): {}", last_error()));
+        }
+        p.sample_time = dt;
+    } else if p.sample_time != dt {
+        return Err(format!(
+            "params_default: sample_time {} ≠ {dt}",
+            p.sample_time
+        ));
+    }
+    let mut out = [ahrs_sentinel()];
+    let null_attack = rng.chance(0.05);
+    prime_last_error("bingham_ahrs_new");
+    let st = unsafe {
+        if null_attack {
+            if rng.chance(0.5) {
+                bingham_ahrs_new(std::ptr::null(), out.as_mut_ptr())
+            } else {
+                bingham_ahrs_new(&p, std::ptr::null_mut())
+            }
+        } else {
+            bingham_ahrs_new(&p, out.as_mut_ptr())
+        }
+    };
+    calls += 1;
+    let want = if null_attack {
+        BINGHAM_ERR_NULL_ARGUMENT
+    } else if !valid_dt {
+        BINGHAM_ERR_INVALID_ARGUMENT
+    } else {
+        BINGHAM_OK
+    };
+    if st != want {
+        return Err(format!(
+            "bingham_ahrs_new (sample_time {dt:e}): {} instead of {} ({})",
+            status_name(st),
+            status_name(want),
+            last_error()
+        ));
+    }
+    if st != BINGHAM_OK {
+        if out[0] != ahrs_sentinel() {
+            return Err("bingham_ahrs_new wrote *out on error".into());
+        }
+        check_error_message("bingham_ahrs_new")?;
+        if !null_attack && !last_error().contains("sample_time") {
+            return Err(format!(
+                "message does not name sample_time: {}",
+                last_error()
+            ));
+        }
+        let st = unsafe { bingham_ahrs_params_default(0.01, &mut p) };
+        assert_eq!(st, BINGHAM_OK);
+        let st = unsafe { bingham_ahrs_new(&p, out.as_mut_ptr()) };
+        if st != BINGHAM_OK {
+            return Err(format!("bingham_ahrs_new with defaults: {}", last_error()));
+        }
+    }
+    let mut a = out[0];
+    let mut twin: *mut bingham_ahrs = std::ptr::null_mut();
+    if unsafe { bingham_ahrs_new(&p, &mut twin) } != BINGHAM_OK {
+        return Err(format!("twin: {}", last_error()));
+    }
+    let dt = p.sample_time;
+    if verbose {
+        eprintln!("sample_time {dt:e}");
+    }
+    let mut imu = Imu {
+        q: {
+            let q = rng.unit_vector(4);
+            if q[0] < 0.0 {
+                [-q[0], -q[1], -q[2], -q[3]]
+            } else {
+                [q[0], q[1], q[2], q[3]]
+            }
+        },
+        w: [0.0; 3],
+    };
+    let use_mag = rng.chance(0.8);
+    let steps = 5 + rng.below(40);
+    let mut result = Ok(());
+    for step in 0..steps {
+        let before = match ahrs_bits(a) {
+            Ok(b) => b,
+            Err(e) => {
+                result = Err(format!("step {step}: {e}"));
+                break;
+            }
+        };
+        let r = rng.below(11);
+        let res: Result<(), String> = (|| {
+            if r < 6 {
+                // --- one sample
+                let mut s = imu.sample(&mut rng, dt);
+                let (mut refuse, mut desc) = (false, String::new());
+                if rng.chance(0.25) {
+                    (refuse, desc) = spoil_sample(&mut rng, &mut s);
+                }
+                let mag_null = !use_mag || rng.chance(0.1);
+                if refuse && mag_null && desc.starts_with("sample[2]") {
+                    refuse = false; // the spoiled magnetometer is not passed
+                }
+                let mut bufs: Vec<Buf> = s.iter().map(|v| Buf::from(v)).collect();
+                let mut ptr: Vec<*mut f64> = bufs.iter_mut().map(|b| b.ptr()).collect();
+                if mag_null {
+                    ptr[2] = std::ptr::null_mut();
+                }
+                let mut ap = a;
+                let mut null = false;
+                if rng.chance(0.05) {
+                    null = true;
+                    match rng.below(4) {
+                        0 => ap = std::ptr::null_mut(),
+                        1 => ptr[0] = std::ptr::null_mut(),
+                        2 => ptr[1] = std::ptr::null_mut(),
+                        _ => ptr[rng.below(2)] = bufs[0].misaligned(3),
+                    }
+                }
+                prime_last_error("bingham_ahrs_update");
+                let st = unsafe { bingham_ahrs_update(ap, ptr[0], ptr[1], ptr[2]) };
+                calls += 1;
+                if verbose {
+                    eprintln!(
+                        "step {step}: update {s:?} mag {} {desc} null {null} -> {}",
+                        !mag_null,
+                        status_name(st)
+                    );
+                }
+                if st == BINGHAM_ERR_PANIC {
+                    return Err(format!("panic: {}", last_error()));
+                }
+                let want = if null {
+                    Some(BINGHAM_ERR_NULL_ARGUMENT)
+                } else if refuse {
+                    Some(BINGHAM_ERR_INVALID_ARGUMENT)
+                } else {
+                    None
+                };
+                expect(st, want, &desc)?;
+                if st != BINGHAM_OK {
+                    check_error_message("bingham_ahrs_update")?;
+                    if ahrs_bits(a)? != before {
+                        return Err(format!(
+                            "refused sample ({}) changed the AHRS",
+                            status_name(st)
+                        ));
+                    }
+                    if !refuse && !null && desc.is_empty() && valid_dt && dt <= 0.1 {
+                        return Err(format!("a clean sample refused: {}", last_error()));
+                    }
+                    return Ok(());
+                }
+                let st2 = unsafe { bingham_ahrs_update(twin, ptr[0], ptr[1], ptr[2]) };
+                if st2 != BINGHAM_OK {
+                    return Err(format!("twin refused an accepted sample: {}", last_error()));
+                }
+                ahrs_bits(a)?;
+            } else if r < 8 {
+                // --- a batch, possibly with a non-finite entry at sample k
+                let n = rng.below(13);
+                let mut g = vec![0.0; 3 * n];
+                let mut ac = vec![0.0; 3 * n];
+                let mut mg = vec![0.0; 3 * n];
+                for k in 0..n {
+                    let s = imu.sample(&mut rng, dt);
+                    g[3 * k..3 * k + 3].copy_from_slice(&s[0]);
+                    ac[3 * k..3 * k + 3].copy_from_slice(&s[1]);
+                    mg[3 * k..3 * k + 3].copy_from_slice(&s[2]);
+                }
+                let mag_null = !use_mag;
+                let bad = (n > 0 && rng.chance(0.4)).then(|| rng.below(n));
+                if let Some(k) = bad {
+                    let arr = match rng.below(if mag_null { 2 } else { 3 }) {
+                        0 => &mut g,
+                        1 => &mut ac,
+                        _ => &mut mg,
+                    };
+                    arr[3 * k + rng.below(3)] = non_finite(&mut rng);
+                }
+                let with_spread = rng.chance(0.5);
+                let spread_null = with_spread && rng.chance(0.3);
+                let (mut bg, mut ba, mut bm) = (Buf::from(&g), Buf::from(&ac), Buf::from(&mg));
+                let mut bq = Buf::sentinel(4 * n);
+                let mut bs = Buf::sentinel(n);
+                let mp = if mag_null {
+                    std::ptr::null()
+                } else {
+                    bm.ptr() as *const f64
+                };
+                let sp = if spread_null {
+                    std::ptr::null_mut()
+                } else {
+                    bs.ptr()
+                };
+                let name = if with_spread {
+                    "bingham_ahrs_update_batch_spread"
+                } else {
+                    "bingham_ahrs_update_batch"
+                };
+                prime_last_error(name);
+                let st = unsafe {
+                    if with_spread {
+                        bingham_ahrs_update_batch_spread(a, n, bg.ptr(), ba.ptr(), mp, bq.ptr(), sp)
+                    } else {
+                        bingham_ahrs_update_batch(a, n, bg.ptr(), ba.ptr(), mp, bq.ptr())
+                    }
+                };
+                calls += 1;
+                if verbose {
+                    eprintln!(
+                        "step {step}: {name} n = {n}, bad {bad:?} -> {}",
+                        status_name(st)
+                    );
+                }
+                if st == BINGHAM_ERR_PANIC {
+                    return Err(format!("panic: {}", last_error()));
+                }
+                {
+                    expect(
+                        st,
+                        bad.map(|_| BINGHAM_ERR_INVALID_ARGUMENT),
+                        &format!("bad sample {bad:?}"),
+                    )?;
+                }
+                // how many samples were processed
+                let done = if st == BINGHAM_OK {
+                    n
+                } else {
+                    check_error_message(name)?;
+                    let msg = last_error();
+                    let k = msg
+                        .split("sample ")
+                        .nth(1)
+                        .and_then(|t| t.split(|c: char| !c.is_ascii_digit()).next())
+                        .and_then(|t| t.parse::<usize>().ok())
+                        .ok_or_else(|| format!("message does not name the sample: {msg}"))?;
+                    if bad.is_some_and(|b| b != k) || k >= n {
+                        return Err(format!(
+                            "stopped at sample {k}, the bad one is {bad:?}: {msg}"
+                        ));
+                    }
+                    k
+                };
+                let q = bq.values();
+                let s = bs.values();
+                if !bq.guards_ok() || !bs.guards_ok() {
+                    return Err("guard words overwritten".into());
+                }
+                for k in 0..n {
+                    let row = &q[4 * k..4 * k + 4];
+                    if k < done {
+                        check_unit(row, 1e-12).map_err(|e| format!("quat row {k}: {e}"))?;
+                        if row[0] < 0.0 {
+                            return Err(format!("quat row {k} with w < 0"));
+                        }
+                        if with_spread && !spread_null && !(s[k].is_finite() && s[k] >= 0.0) {
+                            return Err(format!("spread[{k}] = {}", s[k]));
+                        }
+                    }
+                }
+                if !bq.untouched_range(4 * done, 4 * n) {
+                    return Err(format!(
+                        "quat rows from the refused sample {done} on were written"
+                    ));
+                }
+                if (spread_null || !with_spread) && !bs.untouched() {
+                    return Err("spread written although not passed".into());
+                }
+                if with_spread && !spread_null && !bs.untouched_range(done, n) {
+                    return Err("spread written from the refused sample on".into());
+                }
+                // the twin replays the processed samples one by one
+                for k in 0..done {
+                    let st = unsafe {
+                        bingham_ahrs_update(
+                            twin,
+                            g[3 * k..].as_ptr(),
+                            ac[3 * k..].as_ptr(),
+                            if mag_null {
+                                std::ptr::null()
+                            } else {
+                                mg[3 * k..].as_ptr()
+                            },
+                        )
+                    };
+                    if st != BINGHAM_OK {
+                        return Err(format!(
+                            "twin refused sample {k} of an accepted batch: {}",
+                            last_error()
+                        ));
+                    }
+                }
+                if done == 0 && ahrs_bits(a)? != before {
+                    return Err("a batch refused at sample 0 changed the AHRS".into());
+                }
+            } else if r < 9 {
+                // --- getters with NULL / misaligned arguments
+                let which = rng.below(4);
+                let null_handle = rng.chance(0.5);
+                let mut buf = Buf::sentinel(16);
+                let mut buf2 = Buf::sentinel(4);
+                let op = if rng.chance(0.5) {
+                    std::ptr::null_mut()
+                } else {
+                    buf.misaligned(4)
+                };
+                let (ap, o1, o2) = if null_handle {
+                    (std::ptr::null(), buf.ptr(), buf2.ptr())
+                } else if which == 1 && rng.chance(0.5) {
+                    (a as *const _, buf.ptr(), op)
+                } else {
+                    (a as *const _, op, buf2.ptr())
+                };
+                let (name, st) = unsafe {
+                    match which {
+                        0 => ("bingham_ahrs_quaternion", bingham_ahrs_quaternion(ap, o1)),
+                        1 => ("bingham_ahrs_state", bingham_ahrs_state(ap, o1, o2)),
+                        2 => ("bingham_ahrs_gyro_bias", bingham_ahrs_gyro_bias(ap, o1)),
+                        _ => (
+                            "bingham_ahrs_angular_spread",
+                            bingham_ahrs_angular_spread(ap, o1),
+                        ),
+                    }
+                };
+                calls += 1;
+                expect(st, Some(BINGHAM_ERR_NULL_ARGUMENT), name)?;
+                check_error_message(name)?;
+                if !buf.untouched() || !buf2.untouched() {
+                    return Err(format!("{name} wrote on error"));
+                }
+            } else if r < 10 {
+                // --- clone (sometimes with NULL / misaligned arguments); continue with the copy
+                let mut c = [ahrs_sentinel()];
+                let attack = rng.below(8);
+                let st = unsafe {
+                    match attack {
+                        0 => bingham_ahrs_clone(std::ptr::null(), c.as_mut_ptr()),
+                        1 => bingham_ahrs_clone(a, std::ptr::null_mut()),
+                        2 => bingham_ahrs_clone(
+                            a,
+                            c.as_mut_ptr().cast::<u8>().wrapping_add(3).cast(),
+                        ),
+                        _ => bingham_ahrs_clone(a, c.as_mut_ptr()),
+                    }
+                };
+                calls += 1;
+                if attack <= 2 {
+                    expect(st, Some(BINGHAM_ERR_NULL_ARGUMENT), "clone")?;
+                    check_error_message("bingham_ahrs_clone")?;
+                    if c[0] != ahrs_sentinel() {
+                        return Err("clone wrote *out on error".into());
+                    }
+                    return Ok(());
+                }
+                if st != BINGHAM_OK {
+                    return Err(format!("clone: {}", last_error()));
+                }
+                if ahrs_bits(c[0])? != before {
+                    unsafe { bingham_ahrs_free(c[0]) };
+                    return Err("the clone differs from the original".into());
+                }
+                unsafe {
+                    if rng.chance(0.5) {
+                        bingham_ahrs_free(a);
+                        a = c[0];
+                    } else {
+                        bingham_ahrs_free(c[0]);
+                    }
+                }
+            } else {
+                // --- set_state: a start / re-initialization Bingham(M, z), or hostile
+                let (m, z, mut desc) = ahrs_state_args(&mut rng, &imu.q);
+                let mut want = ahrs_state_expected(&m, &z);
+                let (mut bm, mut bz) = (Buf::from(&m), Buf::from(&z));
+                let (mut ap, mut mp, mut zp) = (a, bm.ptr() as *const f64, bz.ptr() as *const f64);
+                if rng.chance(0.1) {
+                    let null = rng.chance(0.5);
+                    match rng.below(3) {
+                        0 if null => ap = std::ptr::null_mut(),
+                        0 => ap = a.cast::<u8>().wrapping_add(4).cast(),
+                        1 if null => mp = std::ptr::null(),
+                        1 => mp = bm.misaligned(1 + rng.below(7)),
+                        _ if null => zp = std::ptr::null(),
+                        _ => zp = bz.misaligned(1 + rng.below(7)),
+                    }
+                    desc = format!("{desc} (NULL / misaligned: a {ap:p} m {mp:p} z {zp:p})");
+                    want = Some(BINGHAM_ERR_NULL_ARGUMENT);
+                }
+                prime_last_error("bingham_ahrs_set_state");
+                let st = unsafe { bingham_ahrs_set_state(ap, mp, zp) };
+                calls += 1;
+                if verbose {
+                    eprintln!(
+                        "step {step}: set_state M {m:?} z {z:?} {desc} -> {}",
+                        status_name(st)
+                    );
+                }
+                if st == BINGHAM_ERR_PANIC {
+                    return Err(format!("panic: {}", last_error()));
+                }
+                let same = |b: &Buf, v: &[f64]| {
+                    b.guards_ok()
+                        && b.values()
+                            .iter()
+                            .zip(v)
+                            .all(|(x, y)| x.to_bits() == y.to_bits())
+                };
+                if !same(&bm, &m) || !same(&bz, &z) {
+                    return Err(format!("set_state modified its input ({desc})"));
+                }
+                expect(st, want, &format!("bingham_ahrs_set_state ({desc})"))?;
+                if st != BINGHAM_OK {
+                    check_error_message("bingham_ahrs_set_state")?;
+                    if ahrs_bits(a)? != before {
+                        return Err(format!(
+                            "refused set_state ({}, {desc}) changed the AHRS",
+                            status_name(st)
+                        ));
+                    }
+                    return Ok(());
+                }
+                let st2 = unsafe { bingham_ahrs_set_state(twin, m.as_ptr(), z.as_ptr()) };
+                if st2 != BINGHAM_OK {
+                    return Err(format!(
+                        "twin refused an accepted set_state: {}",
+                        last_error()
+                    ));
+                }
+                ahrs_bits(a)?;
+                check_set_state(a, &m, &z).map_err(|e| format!("set_state ({desc}): {e}"))?;
+            }
+            Ok(())
+        })();
+        if let Err(e) = res {
+            result = Err(format!("step {step}: {e}"));
+            break;
+        }
+        match (ahrs_bits(a), ahrs_bits(twin)) {
+            (Ok(x), Ok(y)) if x == y => {}
+            (Ok(_), Ok(_)) => {
+                result = Err(format!(
+                    "step {step}: the twin (fed only the accepted samples) differs: a refused sample changed hidden state"
+                ));
+                break;
+            }
+            (Err(e), _) | (_, Err(e)) => {
+                result = Err(format!("step {step}: {e}"));
+                break;
+            }
+        }
+    }
+    unsafe {
+        bingham_ahrs_free(a);
+        bingham_ahrs_free(twin);
+        bingham_ahrs_free(std::ptr::null_mut());
+    }
+    result.map(|()| calls)
+}
+
+#[test]
+fn fuzz_ahrs_sequences() {
+    run_sequences(
+        "bingham_ahrs",
+        "ahrs",
+        98,
+        cases_for(1.0, 1.0, SHARE_AHRS),
+        ahrs_sequence,
+    );
+}
