@@ -98,10 +98,10 @@ deps:
 	@PYTHON="$(PYTHON)" CXX="$(CXX)" scripts/install-deps.sh
 
 fmt-check:
-	$(CARGO) fmt --check
+	$(CARGO) fmt --all --check
 
 clippy:
-	$(CARGO) clippy --all-targets -- -D warnings
+	$(CARGO) clippy --workspace --all-targets -- -D warnings
 
 # The Rust tests, the C/C++ tests (tests/c_tests.rs) and the header check (tests/header.rs).
 rust-test:
@@ -135,7 +135,7 @@ install-test: build
 sanitize: build
 	CARGO="$(CARGO)" CC="$(CC)" CXX="$(CXX)" scripts/sanitize.sh
 
-# The same programs, and tests/fuzz_ffi.rs with exactly-sized buffers, under valgrind memcheck
+# The same programs, and tests/fuzz_ffi/ with exactly-sized buffers, under valgrind memcheck
 # (about 15 min on 2 cores; installs valgrind when missing).
 valgrind: build
 	CARGO="$(CARGO)" CC="$(CC)" CXX="$(CXX)" scripts/valgrind.sh

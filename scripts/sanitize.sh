@@ -8,7 +8,7 @@
 #   so the library's heap use (Rust allocates with malloc) is checked for double and invalid
 #   frees, and LeakSanitizer reports leaks at exit (ASAN_OPTIONS=detect_leaks=1).
 # - The Rust code itself is not instrumented (that needs a nightly compiler); `make valgrind`
-#   runs tests/fuzz_ffi.rs under memcheck with exactly-sized buffers for that.
+#   runs tests/fuzz_ffi/ under memcheck with exactly-sized buffers for that.
 # - Each executable is checked to really contain the ASan runtime (nm/ldd), so a compiler that
 #   silently ignored -fsanitize could not pass.
 set -euo pipefail

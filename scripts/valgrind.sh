@@ -3,7 +3,7 @@
 #
 # 1. every C/C++ test (c_tests/) and example (examples/c/), built without sanitizers against
 #    the static library (JOBS at a time, default the number of CPUs);
-# 2. the Rust fuzz harness of the C ABI (tests/fuzz_ffi.rs) with exactly-sized buffers
+# 2. the Rust fuzz harness of the C ABI (tests/fuzz_ffi/) with exactly-sized buffers
 #    (BINGHAM_FUZZ_EXACT_BUFFERS=1), so that any read or write of the library beyond a caller's
 #    array, or any use of uninitialized memory, is reported. BINGHAM_VALGRIND_FUZZ_CASES cases
 #    (default 20000; 0 skips this part).
@@ -61,9 +61,9 @@ if [ "$cases" != 0 ]; then
     if (cd "$ROOT" && env "$runner_var=${VALGRIND[*]}" BINGHAM_FUZZ_EXACT_BUFFERS=1 \
             BINGHAM_FUZZ_CASES="$cases" BINGHAM_FUZZ_TIMEOUT=600 \
             "$CARGO" test --release --quiet --test fuzz_ffi >"$OUT/fuzz_ffi.log" 2>&1); then
-        echo "ok   tests/fuzz_ffi.rs, $cases cases, exact buffers ($((SECONDS - t0)) s)"
+        echo "ok   tests/fuzz_ffi/, $cases cases, exact buffers ($((SECONDS - t0)) s)"
     else
-        echo "FAIL tests/fuzz_ffi.rs under valgrind; output:"
+        echo "FAIL tests/fuzz_ffi/ under valgrind; output:"
         tail -n 80 "$OUT/fuzz_ffi.log"
         failed=1
     fi

@@ -24,8 +24,6 @@ pub mod observation;
 pub mod quaternion;
 mod sampler;
 pub mod special;
-#[cfg(test)]
-mod test_rng;
 
 pub use distribution::Bingham;
 pub use error::{Error, Result, MAX_DIM, MIN_DIM};

@@ -237,7 +237,7 @@ mod tests {
     use super::*;
     use nalgebra::{Const, SMatrix, SVector};
 
-    use crate::test_rng::xorshift;
+    use testkit::xorshift;
 
     fn unit_random<const D: usize>(r: &mut impl FnMut() -> f64) -> SVector<f64, D> {
         SVector::<f64, D>::from_fn(|_, _| r()).normalize()

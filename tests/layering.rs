@@ -2,7 +2,7 @@
 //! layer or one below, and the modules import one another without a circle. The layers, from the
 //! bottom (docs/design.md, "Layout"):
 //!
-//! 0. kernels: `error`, `special` (and the unit tests' `test_rng`)
+//! 0. kernels: `error`, `special`
 //! 1. linear algebra: `linalg`, `quaternion`, `canonical` (the canonical form of `(M, z)`)
 //! 2. `normalization`
 //! 3. `distribution`
@@ -21,7 +21,6 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[(&str, u32)] = &[
     ("error", 0),
     ("special", 0),
-    ("test_rng", 0),
     ("linalg", 1),
     ("quaternion", 1),
     ("canonical", 1),

@@ -14,7 +14,7 @@
  *   true initial state (1, 0); 100 steps; 100 Monte Carlo runs.
  *
  * The noise is drawn with the library's exact sampler (bingham_sample, fixed seeds: run r uses
- * the seeds 1000 + 2r and 1001 + 2r, as tests/filter_common/mod.rs does, so the Rust test
+ * the seeds 1000 + 2r and 1001 + 2r, as testkit/src/scenarios.rs does, so the Rust test
  * suite reproduces these numbers). Error per step: the axial angle between truth and estimate,
  * e = min(angle, pi - angle); per run the RMSE over the steps.
  *

@@ -17,7 +17,7 @@
  *
  * The system noise is far from isotropic: with z = -2 along (0, 1, 0, 0) it mostly turns the
  * object about its x axis. Noise is drawn with the library's exact sampler (bingham_sample;
- * run r uses the seeds 1000 + 2r and 1001 + 2r, as tests/filter_common/mod.rs, so the Rust test
+ * run r uses the seeds 1000 + 2r and 1001 + 2r, as testkit/src/scenarios.rs, so the Rust test
  * suite reproduces these numbers). Error per step: e = min(angle, pi - angle) between truth and
  * estimate as vectors in R^4 (half the rotation angle between the orientations); per run the
  * RMSE over the steps.

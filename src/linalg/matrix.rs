@@ -210,7 +210,7 @@ mod tests {
     use super::*;
     use nalgebra::{Const, DMatrix, Dyn, SMatrix};
 
-    use crate::test_rng::xorshift;
+    use testkit::xorshift;
 
     #[test]
     fn sym_eigen_sorts_fixes_signs_and_reconstructs() {

@@ -2,7 +2,7 @@
 
 use super::*;
 
-use crate::test_rng::xorshift;
+use testkit::xorshift;
 
 /// Random orthogonal n×n matrix.
 fn orthogonal(n: usize, r: &mut impl FnMut() -> f64) -> DMatrix<f64> {
@@ -160,13 +160,7 @@ fn reference_eigenvalues(a: &DMatrix<f64>) -> Vec<f64> {
 fn reconstructs_close_eigenvalues() {
     let mut worst: f64 = 0.0;
     let mut ortho: f64 = 0.0;
-    let mut s: u64 = 88172645463325252;
-    let mut r = || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut r = xorshift(88172645463325252);
     for n in [2usize, 3, 4, 7] {
         for _ in 0..300 {
             let g = DMatrix::from_fn(n, n, |_, _| r());

@@ -2,10 +2,6 @@
 
 use super::*;
 
-/// The integration tests' reference-file reader (`tests/data/normalization_d*.csv`), shared.
-#[path = "../../../tests/common/mod.rs"]
-mod test_common;
-
 /// Tanh–sinh (double-exponential) rule on [−1, 1] with step `h`: `(1 + x, 1 − x, w)`,
 /// the distances to both ends computed without cancellation.
 fn tanh_sinh(h: f64) -> Vec<(f64, f64, f64)> {
@@ -113,13 +109,10 @@ fn zero_is_the_sphere_area_with_exact_moments() {
 }
 
 /// Deterministic pseudo-random numbers in [0, 1) (xorshift).
-struct Rng(u64);
+struct Rng(testkit::XorShift64);
 impl Rng {
     fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        self.0.uniform()
     }
     /// Sorted z with `z_d = 0`, log-uniform magnitudes in [1e-3, 10^max_exp], some ties.
     fn z(&mut self, d: usize, max_exp: f64) -> Vec<f64> {
@@ -139,7 +132,7 @@ impl Rng {
 
 #[test]
 fn omega_sums_to_one_and_shift_invariance() {
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut rng = Rng(testkit::XorShift64(0x9E37_79B9_7F4A_7C15));
     for d in [2, 3, 4, 5, 6, 7, 8, 12, 20, 33, 64] {
         for _ in 0..6 {
             let z = rng.z(d, 6.0);
@@ -285,7 +278,7 @@ fn d4_against_brute_force_sphere_quadrature() {
 /// with different nodes and a different path. Likewise the Hessian with `F_{d+4}`.
 #[test]
 fn derivatives_agree_with_the_kume_wood_identities() {
-    let mut rng = Rng(12345);
+    let mut rng = Rng(testkit::XorShift64(12345));
     let log_2pi = (2.0 * PI).ln();
     for d in [2, 3, 4, 5, 6, 8, 64] {
         for _ in 0..3 {
@@ -430,14 +423,9 @@ fn extreme_and_mixed_scales_stay_finite_and_consistent() {
 #[test]
 fn hessian_converges_for_d64_at_large_concentrations() {
     for case in [363u64, 375, 420, 0, 1, 2] {
-        let mut st = case.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x1234;
+        let mut lcg = testkit::Lcg(case.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x1234);
         let mut z: Vec<f64> = (0..64)
-            .map(|_| {
-                st = st
-                    .wrapping_mul(6_364_136_223_846_793_005)
-                    .wrapping_add(1_442_695_040_888_963_407);
-                -(10f64.powf(6.3 * (st >> 11) as f64 / (1u64 << 53) as f64))
-            })
+            .map(|_| -(10f64.powf(6.3 * lcg.uniform())))
             .collect();
         z[63] = 0.0;
         z.sort_by(f64::total_cmp);
@@ -540,7 +528,7 @@ fn quadrature_converges_geometrically() {
 /// that converge slowest: log-uniform magnitudes, clusters, ladders, near-ties, ties.
 #[test]
 fn planned_rule_matches_the_fixed_fine_rule() {
-    let mut rng = Rng(0x5DEE_CE66_D1CE_4E5B);
+    let mut rng = Rng(testkit::XorShift64(0x5DEE_CE66_D1CE_4E5B));
     let fine = Rule {
         tol: 0.0,
         planned: false,
@@ -596,7 +584,7 @@ fn planned_rule_matches_the_fixed_fine_rule() {
 #[test]
 fn against_high_precision_reference_files() {
     for d in 2..=8 {
-        let rows = test_common::read_reference(d);
+        let rows = testkit::read_reference(d);
         let (mut ef, mut ew, mut eh) = (0.0f64, 0.0f64, 0.0f64);
         for row in &rows {
             let (z, lf, om, hr) = (&row.z, &row.log_f, &row.omega, &row.hess);

@@ -21,12 +21,9 @@ fn arguments() -> Vec<f64> {
     xs.extend([
         0.0, 0.01, 0.1, 0.2, 3.1, 3.11, 3.12, 3.13, 50.0, 50.1, 50.2, 50.3,
     ]);
-    let mut state = 12345u64;
+    let mut lcg = testkit::Lcg(12345);
     for k in 0..4000 {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+        let u = lcg.uniform();
         xs.push(match k % 3 {
             0 => 8.0 * u,
             1 => 128.0 * u,
