@@ -1,0 +1,139 @@
+//! The AHRS's filter coefficients and the second-order low-pass filter of a vector fixed in
+//! the quasi-inertial frame (turned with every gyroscope increment).
+
+use super::vec3::scale3;
+use super::AhrsParams;
+use crate::quaternion::q4;
+
+/// First-order low-pass coefficient for time constant `tau` at period `dt`.
+pub(super) fn lp_coeff(dt: f64, tau: f64) -> f64 {
+    1.0 - (-dt / tau).exp()
+}
+
+/// The number of samples in one time constant `tau` (at least 1, at most `u32::MAX`).
+pub(super) fn warmup(dt: f64, tau: f64) -> u32 {
+    (tau / dt).ceil().clamp(1.0, f64::from(u32::MAX)) as u32
+}
+
+/// Time constant (s) of the low-pass filters of the rest detection.
+pub(super) const REST_FILTER_TIME: f64 = 0.5;
+
+/// Time constant (s) with which a disturbed field's candidate reference follows it.
+pub(super) const CANDIDATE_TIME: f64 = 1.0;
+
+/// The filter coefficients that follow from the parameters (computed once).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Coeffs {
+    pub(super) rest_filter: f64,
+    pub(super) rest_bias: f64,
+    pub(super) mag_ref: f64,
+    pub(super) candidate: f64,
+    pub(super) acc: [f64; 5],
+    pub(super) mag: [f64; 5],
+    /// Warm-up lengths (samples) of the accelerometer's and magnetometer's low-pass filters.
+    pub(super) acc_warmup: u32,
+    pub(super) mag_warmup: u32,
+}
+
+impl Coeffs {
+    pub(super) fn new(p: &AhrsParams) -> Coeffs {
+        let dt = p.sample_time;
+        Coeffs {
+            rest_filter: lp_coeff(dt, REST_FILTER_TIME),
+            rest_bias: lp_coeff(dt, p.rest_bias_time),
+            mag_ref: lp_coeff(dt, p.mag_ref_time),
+            candidate: lp_coeff(dt, CANDIDATE_TIME),
+            acc: butterworth(dt, p.acc_tau),
+            mag: butterworth(dt, p.mag_tau),
+            acc_warmup: warmup(dt, p.acc_tau),
+            mag_warmup: warmup(dt, p.mag_tau),
+        }
+    }
+}
+
+/// Coefficients `(b0, b1, b2, a1, a2)` of a second-order Butterworth low-pass filter with time
+/// constant `tau` (cut-off `√2/(2πτ)`) at period `dt` (bilinear transform).
+pub(super) fn butterworth(dt: f64, tau: f64) -> [f64; 5] {
+    let fc = std::f64::consts::SQRT_2 / (2.0 * std::f64::consts::PI * tau);
+    let c = (std::f64::consts::PI * fc * dt).tan();
+    let d = c * c + std::f64::consts::SQRT_2 * c + 1.0;
+    let b0 = c * c / d;
+    [
+        b0,
+        2.0 * b0,
+        b0,
+        2.0 * (c * c - 1.0) / d,
+        (1.0 - std::f64::consts::SQRT_2 * c + c * c) / d,
+    ]
+}
+
+/// A second-order low-pass filter of a vector that is fixed in the quasi-inertial frame: its
+/// output and states are expressed in the sensor frame and turned with every gyroscope
+/// increment, so the filter averages in the frame where gravity and the magnetic field stand
+/// still. It starts as a running mean over its first `τ/dt` samples (so the first output is not
+/// one noisy sample held for a time constant) and continues from that mean in steady state.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct InertialLowPass {
+    pub(super) coeff: [f64; 5],
+    pub(super) y: [f64; 3],
+    pub(super) s0: [f64; 3],
+    pub(super) s1: [f64; 3],
+    /// Samples averaged so far while warming up, and how many the warm-up takes.
+    pub(super) count: u32,
+    pub(super) warmup: u32,
+}
+
+impl InertialLowPass {
+    /// The filter started at the sample `x`; `warmup` samples are averaged before the
+    /// second-order filter takes over.
+    pub(super) fn new(coeff: [f64; 5], warmup: u32, x: &[f64; 3]) -> InertialLowPass {
+        let mut f = InertialLowPass {
+            coeff,
+            y: *x,
+            s0: [0.0; 3],
+            s1: [0.0; 3],
+            count: 1,
+            warmup,
+        };
+        if f.count >= f.warmup {
+            f.settle();
+        }
+        f
+    }
+
+    /// Puts the second-order filter in steady state at the current output.
+    pub(super) fn settle(&mut self) {
+        let [b0, _, b2, _, a2] = self.coeff;
+        self.s0 = scale3(&self.y, 1.0 - b0);
+        self.s1 = scale3(&self.y, b2 - a2);
+    }
+
+    /// Expresses the state in the next sensor frame (`dq` the body-frame increment).
+    pub(super) fn turn(&mut self, dq: &[f64; 4]) {
+        self.y = q4::rotate_inverse(dq, &self.y);
+        self.s0 = q4::rotate_inverse(dq, &self.s0);
+        self.s1 = q4::rotate_inverse(dq, &self.s1);
+    }
+
+    /// One sample: the running mean while warming up, then direct form II transposed.
+    pub(super) fn step(&mut self, x: &[f64; 3]) {
+        if self.count < self.warmup {
+            self.count += 1;
+            let k = 1.0 / f64::from(self.count);
+            for (y, &xi) in self.y.iter_mut().zip(x) {
+                *y += k * (xi - *y);
+            }
+            if self.count == self.warmup {
+                self.settle();
+            }
+            return;
+        }
+        let [b0, b1, b2, a1, a2] = self.coeff;
+        for (i, &xi) in x.iter().enumerate() {
+            let y = b0 * xi + self.s0[i];
+            self.s0[i] = b1 * xi - a1 * y + self.s1[i];
+            self.s1[i] = b2 * xi - a2 * y;
+            self.y[i] = y;
+        }
+    }
+}

@@ -1,0 +1,147 @@
+//! The AHRS parameters: their meaning, units, the tuned defaults and their validation.
+
+use crate::error::{Error, Result};
+
+/// The smallest sampling period (s) the AHRS accepts.
+pub const MIN_SAMPLE_TIME: f64 = 1e-6;
+
+/// The largest sampling period (s) the AHRS accepts.
+pub const MAX_SAMPLE_TIME: f64 = 1e3;
+
+/// The smallest process noise per step (rad) the AHRS accepts (`gyro_noise·√sample_time`): below
+/// it the noise's concentration leaves the moment matching's range.
+pub const MIN_STEP_NOISE: f64 = 1e-6;
+
+/// Parameters of the AHRS (`bingham_ahrs_params` in C, `AhrsParams` in Rust). The defaults —
+/// `bingham_ahrs_params_default()` in C, `AhrsParams::new(sample_time)` in Rust — are the tuned
+/// set: tuned once on the nine BROAD trials, one set for all recordings. Angles in radians,
+/// times in seconds. Fill it with the defaults, then change fields if needed.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AhrsParams {
+    /// Sampling period in seconds (1e-6 to 1e3).
+    pub sample_time: f64,
+    /// Orientation process noise in rad/√s: the prediction adds isotropic rotation noise with
+    /// standard deviation `gyro_noise·√sample_time` per step (gyroscope noise, bias drift and
+    /// model error together).
+    pub gyro_noise: f64,
+    /// Angular standard deviation (rad) of one accelerometer direction sample as a measurement
+    /// of "up" (`κ = 1/acc_noise²`).
+    pub acc_noise: f64,
+    /// Linear-acceleration rejection scale in m/s²: `κ` is divided by
+    /// `1 + ((|ā| − gravity)/acc_reject)²`, `ā` the low-passed accelerometer.
+    pub acc_reject: f64,
+    /// Time constant (s) of the accelerometer's low-pass filter in the gyroscope-integrated
+    /// (quasi-inertial) frame: linear accelerations average out there, gravity does not.
+    pub acc_tau: f64,
+    /// Time constant (s) of the magnetometer's low-pass filter in the same frame.
+    pub mag_tau: f64,
+    /// Magnitude of gravity in m/s².
+    pub gravity: f64,
+    /// Angular standard deviation (rad) of one magnetometer heading sample (`κ = 1/mag_noise²`).
+    pub mag_noise: f64,
+    /// Relative tolerance on the magnetic field's norm before a sample counts as disturbed.
+    pub mag_norm_tol: f64,
+    /// Tolerance (rad) on the field's dip angle before a sample counts as disturbed.
+    pub mag_dip_tol: f64,
+    /// Time constant (s) with which the reference norm and dip follow undisturbed samples.
+    pub mag_ref_time: f64,
+    /// A disturbance whose norm and dip stay steady this long (s) becomes the new reference.
+    pub mag_new_time: f64,
+    /// Time constant (s) of the gyroscope-bias estimation from the observations' corrections
+    /// during motion (`0` disables it).
+    pub bias_time: f64,
+    /// Largest gyroscope bias (rad/s) per axis the estimate may reach.
+    pub bias_max: f64,
+    /// Time (s) the sensor must be still before the bias is taken from the gyroscope.
+    pub rest_time: f64,
+    /// Rest threshold on the gyroscope's deviation from its low-pass value (rad/s).
+    pub rest_gyro: f64,
+    /// Rest threshold on the accelerometer's deviation from its low-pass value (m/s²).
+    pub rest_acc: f64,
+    /// Time constant (s) of the bias estimate while at rest.
+    pub rest_bias_time: f64,
+    /// Angular standard deviation (rad) of the initial tilt and heading.
+    pub init_std: f64,
+}
+
+impl AhrsParams {
+    /// The default (tuned) parameters for the sampling period `sample_time` (s).
+    pub fn new(sample_time: f64) -> AhrsParams {
+        AhrsParams {
+            sample_time,
+            gyro_noise: 0.008,
+            acc_noise: 0.4,
+            acc_reject: 1.0,
+            acc_tau: 3.0,
+            mag_tau: 9.0,
+            gravity: 9.81,
+            mag_noise: 0.6,
+            mag_norm_tol: 0.1,
+            mag_dip_tol: 10f64.to_radians(),
+            mag_ref_time: 20.0,
+            mag_new_time: 20.0,
+            bias_time: 100.0,
+            bias_max: 2f64.to_radians(),
+            rest_time: 1.5,
+            rest_gyro: 2f64.to_radians(),
+            rest_acc: 0.5,
+            rest_bias_time: 2.0,
+            init_std: 0.1,
+        }
+    }
+
+    /// Checks every field (finite; periods, noises and thresholds positive; `bias_time ≥ 0`;
+    /// `sample_time` within [`MIN_SAMPLE_TIME`, `MAX_SAMPLE_TIME`]; the process noise per step
+    /// at least [`MIN_STEP_NOISE`]).
+    pub fn validate(&self) -> Result<()> {
+        let positive = [
+            ("sample_time", self.sample_time),
+            ("gyro_noise", self.gyro_noise),
+            ("acc_noise", self.acc_noise),
+            ("acc_reject", self.acc_reject),
+            ("acc_tau", self.acc_tau),
+            ("mag_tau", self.mag_tau),
+            ("gravity", self.gravity),
+            ("mag_noise", self.mag_noise),
+            ("mag_norm_tol", self.mag_norm_tol),
+            ("mag_dip_tol", self.mag_dip_tol),
+            ("mag_ref_time", self.mag_ref_time),
+            ("mag_new_time", self.mag_new_time),
+            ("bias_max", self.bias_max),
+            ("rest_time", self.rest_time),
+            ("rest_gyro", self.rest_gyro),
+            ("rest_acc", self.rest_acc),
+            ("rest_bias_time", self.rest_bias_time),
+            ("init_std", self.init_std),
+        ];
+        for (name, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::InvalidArgument(format!(
+                    "AHRS parameter `{name}` must be finite and > 0, got {v}"
+                )));
+            }
+        }
+        if !(MIN_SAMPLE_TIME..=MAX_SAMPLE_TIME).contains(&self.sample_time) {
+            return Err(Error::InvalidArgument(format!(
+                "AHRS parameter `sample_time` must lie in [{MIN_SAMPLE_TIME:e}, \
+                 {MAX_SAMPLE_TIME:e}] s, got {}",
+                self.sample_time
+            )));
+        }
+        let step = self.gyro_noise * self.sample_time.sqrt();
+        if step < MIN_STEP_NOISE {
+            return Err(Error::InvalidArgument(format!(
+                "AHRS parameters `gyro_noise`·√`sample_time` = {step:e} rad (the process noise per \
+                 step) must be at least {MIN_STEP_NOISE:e} rad"
+            )));
+        }
+        if !(self.bias_time.is_finite() && self.bias_time >= 0.0) {
+            return Err(Error::InvalidArgument(format!(
+                "AHRS parameter `bias_time` must be finite and >= 0, got {}",
+                self.bias_time
+            )));
+        }
+        Ok(())
+    }
+}
