@@ -9,51 +9,16 @@
 //! * d = 3: the single coordinate `x1` (`x1² = u`) and the circle `(z2, z3)`:
 //!   `F = 2π ∫₀¹ A(u) B(1−u) du`, `A(r) = r^{−1/2} e^{r z1}`, `B(r) = I0e(r (z3−z2)/2)`.
 //!
-//! Moments come from the same integrals: on a circle of radius² `r` with Bessel argument
-//! `x = rβ`, `E[x_lo²] = r (I0e − I1e)/2`, `E[x_hi²] = r (I0e + I1e)/2`,
-//! `E[x_lo⁴] = r² Q/8` (`Q = e^{−x}(3I0 − 4I1 + I2)`), `E[x_lo² x_hi²] = r² I1e/(4x)`,
-//! `E[x_hi⁴] = r² (3I0e + 4I1e + I2e)/8` (each times the group's exponential factor).
-//! Every integrand is positive, so `ω_i = E[x_i²]` carries no cancellation.
+//! Moments come from the same integrals (the circle moments `E[x_lo²] = r (I0e − I1e)/2`, …, in
+//! `docs/design.md`); every integrand is positive, so `ω_i = E[x_i²]` carries no cancellation.
 //!
-//! Numerics: the two halves `u ∈ [0, ½]` and `u ∈ [½, 1]` are integrated in `v = √u` and
-//! `s = √(1−u)`, which removes the `r^{−1/2}` behaviour of both factors at the ends; the
-//! boundary layers (width `1/|z|` in `u`) are resolved by 20-point Gauss–Legendre panels graded
-//! from the smallest feature scale, with a ratio that grows from panel to panel (see `LAYOUT`:
-//! 59 nodes on average for d = 4, 43 for d = 3). The exponential factor `e^{u z}` is cut where
-//! it drops below `e^{−40}` (a relative truncation error of about 4e-18, see `Layout::trunc`).
-//! The rule's error is measured against 65-digit references (`tests/data`); the figures are in
-//! `docs/accuracy.md`. Hessian entries are less accurate than `ω` (relative to the scale of their
-//! row): a covariance `E[x_i² x_j²] − ω_i ω_j` of nearly independent coordinates cancels digits.
-//! The MLE's accuracy depends on `ω` only; the Hessian only steers its Newton steps.
-//!
-//! Range: every sum is accumulated with exact power-of-two scale factors per group and half
-//! (see `Scaling`): the near group's `√r·g` and the far group's `g` are multiplied by a
-//! constant `C` that makes them O(1) where the integral's mass is (`√β` for a circle whose
-//! Bessel argument is large there, where `I0e(x) ≈ (2πx)^{−1/2}`), and each moment sum by a
-//! constant `D` of the order of `1/E[x_k²]` (`β` for the lo coordinate of such a circle,
-//! `1/R` otherwise, `R` the largest radius² of the group in that half). The Bessel functions
-//! enter as `k·I0e(x)`, `k·x·(I0e − I1e)(x)` with the factor `k·x^{−1/2}` formed first
-//! ([`crate::special::i01e_times`]), so no factor underflows: for any finite `z`, `log F`
-//! and every `ω_i` (down to `1/(2|z_i|)` ≈ 3e-309) keep their relative accuracy. Grading
-//! starts no lower than `1e-20·t_max` (`FLOOR`), which bounds the panel count when
-//! `1/√β ≪ t_max`. Checked against 65-digit references at |z| = 1e10, 1e100, 1e300
-//! (`tests/data/normalization_extreme.csv`) and against the two-Gaussian asymptote for all
-//! |z_i| ≥ 1e20 (`tests/totality.rs`); figures in `docs/accuracy.md`.
-//!
-//! Evaluation: the nodes of a panel are taken 4 or 8 at a time (a batch of lanes), and every
-//! step — Bessel fits ([`crate::special::lanes`]), exponentials, moment products, sums — is the
-//! same operation on all lanes, written as plain Rust on fixed-size arrays that the compiler
-//! turns into SIMD instructions. The kernel (`kernel::half`) is compiled three times: for AVX2 +
-//! FMA, for AVX-512, and for the target's baseline (SSE2 on x86-64, NEON on aarch64);
-//! `simd::half_on` runs the one [`Path::detected`] chose at run time (module `simd`, the crate's
-//! only `unsafe` outside the FFI: calling a function compiled for CPU features the detection
-//! found). Lane sums are added in lane
-//! order at the end of a half, so a result depends on the input and the path only. Per panel
-//! and group, the Bessel arguments of the first and last node tell whether every batch sits on
-//! one piece of the fits or beyond them ([`lanes::Span`]); the batches then skip the per-lane
-//! piece search (same values). The kernel is limited by its instruction count (about 200–350
-//! per batch of 4 nodes with AVX2 for d = 4 with the gradient, measured with callgrind); on the
-//! Zen 4 development machine the 8-lane AVX-512 kernel, which halves it, is the fastest path.
+//! Contract: for every finite sorted `z` with `z_d = 0`, `log F` and every `ω_i` to near machine
+//! precision (down to `ω_i ≈ 1/(2|z_i|)` at |z| = 1e300); the Hessian less accurately (a
+//! covariance of nearly independent coordinates cancels digits; it only steers the MLE). How: the halves `u ∈ [0, ½]`, `[½, 1]` in `√u`, `√(1−u)`, graded 20-point
+//! Gauss–Legendre panels (`LAYOUT`), power-of-two scalings per group and half (`Scaling`), the
+//! kernel (`kernel`) compiled per CPU path (`simd`, the crate's only `unsafe` outside the FFI).
+//! Derivation and numerics: `docs/design.md` (§ "Numerical notes": d = 3, 4 quadrature, kernel
+//! paths, range); measured accuracy `docs/accuracy.md`, speed `docs/speed.md`.
 
 use super::gauss::gauss_legendre_unit;
 use super::Path;
