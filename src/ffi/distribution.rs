@@ -1,0 +1,525 @@
+//! The functions of a distribution `(m, z)` in the C API, over [`crate::distribution::Bingham`]:
+//! its second moment, products and compositions of two distributions, density, entropy,
+//! Kullback–Leibler divergence, random samples, rotations and mode. Thin wrappers: check `d`
+//! and the pointers, read and validate the distributions, call the core, copy the results out.
+
+use rand::rngs::StdRng;
+use rand::SeedableRng;
+
+use super::guard::{dim, guard, len2, need, read, write, write1, Failure, FfiResult};
+use super::status::bingham_status;
+use crate::distribution::Bingham;
+
+/// Reads `(m, z)` (d×d row-major, length d) and builds the normalized distribution.
+///
+/// # Safety
+/// As for [`read`]: `m` points to `d*d` and `z` to `d` readable doubles (or is NULL → error).
+pub(super) unsafe fn distribution(
+    d: usize,
+    m_name: &str,
+    m: *const f64,
+    z_name: &str,
+    z: *const f64,
+) -> FfiResult<Bingham> {
+    // SAFETY: forwarded caller contract; d <= 64 so d*d cannot overflow.
+    let (ms, zs) = unsafe { (read(m_name, m, d * d)?, read(z_name, z, d)?) };
+    Bingham::from_row_major(d, ms, zs)
+        .map_err(|e| Failure::from(e).context(format_args!("(`{m_name}`, `{z_name}`)")))
+}
+
+/// Copies a distribution to the caller's `m` (d×d row-major) and `z` (length d).
+///
+/// # Safety
+/// As for [`write`]: `m` has `d*d`, `z` has `d` writable doubles, both checked non-NULL.
+pub(super) unsafe fn write_distribution(b: &Bingham, m: *mut f64, z: *mut f64) {
+    let mr = b.m_row_major();
+    // SAFETY: forwarded caller contract; lengths d*d and d.
+    unsafe {
+        write(m, &mr);
+        write(z, b.z().as_slice());
+    }
+}
+
+/// The second moment `S = E[x xᵀ] = M diag(ω) Mᵀ` of Bingham(M, Z) (the covariance, as E[x] = 0),
+/// with ω_i = ∂ log F/∂z_i; trace S = 1.
+///
+/// - `d`: 2..64.
+/// - `m`: d×d row-major orthogonal matrix (max |MᵀM − I| ≤ `BINGHAM_ORTHOGONALITY_TOL`), columns
+///   are the principal directions.
+/// - `z`: d concentrations, column i of `m` belongs to `z[i]`; any order and shift.
+/// - `s`: receives S, d×d row-major, symmetric.
+///
+/// Errors: `BINGHAM_ERR_INVALID_DIMENSION`, `BINGHAM_ERR_NULL_ARGUMENT`,
+/// `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, M not orthogonal), `BINGHAM_ERR_NUMERICAL`.
+/// On error nothing is written.
+///
+/// # Safety
+/// `m`: d*d and `z`: d readable doubles; `s`: d*d writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_second_moment(
+    d: usize,
+    m: *const f64,
+    z: *const f64,
+    s: *mut f64,
+) -> bingham_status {
+    guard("bingham_second_moment", || {
+        dim(d)?;
+        need("m", m)?;
+        need("z", z)?;
+        need("s", s)?;
+        // SAFETY: caller contract.
+        let b = unsafe { distribution(d, "m", m, "z", z)? };
+        let sm = b.second_moment()?.transpose(); // column-major storage of the transpose = row-major
+                                                 // SAFETY: pointer checked; length d*d.
+        unsafe { write(s, sm.as_slice()) };
+        Ok(())
+    })
+}
+
+/// Product of two Bingham densities (Bayes' rule), renormalized:
+/// `f1(x) f2(x) ∝ Bingham(M, Z)` with `M Z Mᵀ = eig(M1 Z1 M1ᵀ + M2 Z2 M2ᵀ)`. Exact.
+///
+/// - `d`: 2..64.
+/// - `m1`, `z1`, `m2`, `z2`: the two factors (d×d row-major orthogonal, length d; any order and
+///   shift of z).
+/// - `m`, `z`: receive the product, z ascending with z[d-1] = 0, the last column of `m` the mode.
+///   May be the same arrays as `m1`/`z1` or `m2`/`z2` (in-place update).
+///
+/// Errors: `BINGHAM_ERR_INVALID_DIMENSION`, `BINGHAM_ERR_NULL_ARGUMENT`,
+/// `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, M not orthogonal), `BINGHAM_ERR_NUMERICAL`.
+/// On error nothing is written.
+///
+/// # Safety
+/// `m1`, `m2`: d*d and `z1`, `z2`: d readable doubles; `m`: d*d and `z`: d writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_multiply(
+    d: usize,
+    m1: *const f64,
+    z1: *const f64,
+    m2: *const f64,
+    z2: *const f64,
+    m: *mut f64,
+    z: *mut f64,
+) -> bingham_status {
+    guard("bingham_multiply", || {
+        // SAFETY: forwarded caller contract.
+        unsafe { binary(d, m1, z1, m2, z2, m, z, |a, b| a.multiply(b)) }
+    })
+}
+
+/// Composition (the distribution of `x ⊕ y` for independent x ~ (m1, z1), y ~ (m2, z2)),
+/// approximated by the Bingham distribution with the same second moment (moment matching;
+/// the composed moment itself is exact). d = 2 and d = 4 only.
+///
+/// `⊕` is complex multiplication for d = 2 (x = (re, im)) and the Hamilton product for d = 4 with
+/// **scalar-first** quaternions (w, x, y, z): `x ⊕ y = L(x) y`. Used for the prediction step of
+/// the Bingham filter (state ⊕ noise).
+///
+/// Arguments as for `bingham_multiply()`; outputs may alias inputs.
+///
+/// Errors: `BINGHAM_ERR_INVALID_DIMENSION` (d not 2 or 4), `BINGHAM_ERR_NULL_ARGUMENT`,
+/// `BINGHAM_ERR_INVALID_ARGUMENT`, `BINGHAM_ERR_NOT_CONVERGED`, `BINGHAM_ERR_NUMERICAL`.
+/// On error nothing is written.
+///
+/// # Safety
+/// `m1`, `m2`: d*d and `z1`, `z2`: d readable doubles; `m`: d*d and `z`: d writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_compose(
+    d: usize,
+    m1: *const f64,
+    z1: *const f64,
+    m2: *const f64,
+    z2: *const f64,
+    m: *mut f64,
+    z: *mut f64,
+) -> bingham_status {
+    guard("bingham_compose", || {
+        // SAFETY: forwarded caller contract.
+        unsafe { binary(d, m1, z1, m2, z2, m, z, |a, b| a.compose(b)) }
+    })
+}
+
+/// Shared body of `bingham_multiply` and `bingham_compose`.
+///
+/// # Safety
+/// Caller contract of the exported functions.
+#[allow(clippy::too_many_arguments)]
+unsafe fn binary(
+    d: usize,
+    m1: *const f64,
+    z1: *const f64,
+    m2: *const f64,
+    z2: *const f64,
+    m: *mut f64,
+    z: *mut f64,
+    op: impl FnOnce(&Bingham, &Bingham) -> crate::error::Result<Bingham>,
+) -> FfiResult<()> {
+    dim(d)?;
+    need("m1", m1)?;
+    need("z1", z1)?;
+    need("m2", m2)?;
+    need("z2", z2)?;
+    need("m", m)?;
+    need("z", z)?;
+    // SAFETY: caller contract of the exported function (lengths d*d and d).
+    let (a, b) = unsafe {
+        (
+            distribution(d, "m1", m1, "z1", z1)?,
+            distribution(d, "m2", m2, "z2", z2)?,
+        )
+    };
+    let r = op(&a, &b)?;
+    // SAFETY: pointers checked; lengths d*d and d.
+    unsafe { write_distribution(&r, m, z) };
+    Ok(())
+}
+
+/// Shared body of `bingham_pdf` and `bingham_log_pdf`.
+///
+/// # Safety
+/// Caller contract of the exported functions.
+#[allow(clippy::too_many_arguments)]
+unsafe fn pointwise(
+    d: usize,
+    m: *const f64,
+    z: *const f64,
+    n: usize,
+    x: *const f64,
+    p_name: &str,
+    p: *mut f64,
+    f: impl Fn(f64) -> f64,
+) -> FfiResult<()> {
+    dim(d)?;
+    let nd = len2("x", n, d)?;
+    need("m", m)?;
+    need("z", z)?;
+    if n > 0 {
+        need("x", x)?;
+        need(p_name, p)?;
+    }
+    // SAFETY: caller contract.
+    let b = unsafe { distribution(d, "m", m, "z", z)? };
+    // SAFETY: caller contract.
+    let xs = unsafe { read("x", x, nd)? };
+    let mut values = Vec::new();
+    values.try_reserve_exact(n).map_err(|_| {
+        Failure::new(
+            bingham_status::BINGHAM_ERR_NUMERICAL,
+            format!("cannot allocate memory for n = {n} values"),
+        )
+    })?;
+    // One normalization for all points.
+    let log_f = if n > 0 { b.log_normalization()? } else { 0.0 };
+    for (i, row) in xs.chunks_exact(d).enumerate() {
+        let v = b
+            .log_pdf_given(row, log_f)
+            .map_err(|e| Failure::from(e).context(format_args!("x row {i}")))?;
+        values.push(f(v));
+    }
+    if n > 0 {
+        // SAFETY: p checked non-NULL; n writable doubles.
+        unsafe { write(p, &values) };
+    }
+    Ok(())
+}
+
+/// The density `f(x) = exp(xᵀ M Z Mᵀ x) / F(Z)` at n points, with respect to the surface measure
+/// of S^{d-1} (so it integrates to 1 over the sphere; for d = 2 it is a density in the angle).
+///
+/// - `d`: 2..64; `m`, `z`: the distribution (d×d row-major orthogonal, length d).
+/// - `n`: number of points (0 is allowed: nothing is done, `x` and `p` may then be `NULL`).
+/// - `x`: n×d row-major, each row a unit vector (|‖x‖ − 1| ≤ `BINGHAM_UNIT_TOL`).
+/// - `p`: receives the n densities. May overflow to +Inf for extreme concentrations: use
+///   `bingham_log_pdf()` there.
+///
+/// Errors: `BINGHAM_ERR_INVALID_DIMENSION` (d; n*d overflow), `BINGHAM_ERR_NULL_ARGUMENT`,
+/// `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, M not orthogonal, a row not unit: the message names
+/// the row), `BINGHAM_ERR_NUMERICAL`. All points are checked before anything is written.
+///
+/// # Safety
+/// `m`: d*d and `z`: d readable doubles; `x`: n*d readable doubles; `p`: n writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_pdf(
+    d: usize,
+    m: *const f64,
+    z: *const f64,
+    n: usize,
+    x: *const f64,
+    p: *mut f64,
+) -> bingham_status {
+    guard("bingham_pdf", || {
+        // SAFETY: forwarded caller contract.
+        unsafe { pointwise(d, m, z, n, x, "p", p, f64::exp) }
+    })
+}
+
+/// The natural logarithm of the density, `xᵀ M Z Mᵀ x − log F(Z)`, at n points; finite for every
+/// finite input. Arguments, errors and safety as for `bingham_pdf()`, with `log_p` for `p`.
+///
+/// # Safety
+/// `m`: d*d and `z`: d readable doubles; `x`: n*d readable doubles; `log_p`: n writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_log_pdf(
+    d: usize,
+    m: *const f64,
+    z: *const f64,
+    n: usize,
+    x: *const f64,
+    log_p: *mut f64,
+) -> bingham_status {
+    guard("bingham_log_pdf", || {
+        // SAFETY: forwarded caller contract.
+        unsafe { pointwise(d, m, z, n, x, "log_p", log_p, |v| v) }
+    })
+}
+
+/// Differential entropy `H = −E[log f(x)] = log F(Z) − Σ z_i ω_i` in nats, with respect to the
+/// surface measure (H = log |S^{d-1}| for the uniform distribution; negative for concentrated
+/// ones).
+///
+/// - `d`, `m`, `z`: the distribution; `h`: receives H.
+///
+/// Errors: `BINGHAM_ERR_INVALID_DIMENSION`, `BINGHAM_ERR_NULL_ARGUMENT`,
+/// `BINGHAM_ERR_INVALID_ARGUMENT`, `BINGHAM_ERR_NUMERICAL`. On error nothing is written.
+///
+/// # Safety
+/// `m`: d*d and `z`: d readable doubles; `h`: one writable double.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_entropy(
+    d: usize,
+    m: *const f64,
+    z: *const f64,
+    h: *mut f64,
+) -> bingham_status {
+    guard("bingham_entropy", || {
+        dim(d)?;
+        need("m", m)?;
+        need("z", z)?;
+        need("h", h)?;
+        // SAFETY: caller contract.
+        let b = unsafe { distribution(d, "m", m, "z", z)? };
+        let value = b.entropy()?;
+        // SAFETY: pointer checked.
+        unsafe { write1(h, value) };
+        Ok(())
+    })
+}
+
+/// Kullback–Leibler divergence `KL(p1 ‖ p2) = E_{p1}[log p1(x) − log p2(x)] ≥ 0` in nats, between
+/// p1 = Bingham(m1, z1) and p2 = Bingham(m2, z2) of the same dimension.
+///
+/// - `d`: 2..64; `m1`, `z1`, `m2`, `z2`: the two distributions; `kl`: receives the divergence.
+///
+/// Errors: `BINGHAM_ERR_INVALID_DIMENSION`, `BINGHAM_ERR_NULL_ARGUMENT`,
+/// `BINGHAM_ERR_INVALID_ARGUMENT`, `BINGHAM_ERR_NUMERICAL`. On error nothing is written.
+///
+/// # Safety
+/// `m1`, `m2`: d*d and `z1`, `z2`: d readable doubles; `kl`: one writable double.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_kl_divergence(
+    d: usize,
+    m1: *const f64,
+    z1: *const f64,
+    m2: *const f64,
+    z2: *const f64,
+    kl: *mut f64,
+) -> bingham_status {
+    guard("bingham_kl_divergence", || {
+        dim(d)?;
+        need("m1", m1)?;
+        need("z1", z1)?;
+        need("m2", m2)?;
+        need("z2", z2)?;
+        need("kl", kl)?;
+        // SAFETY: caller contract.
+        let (a, b) = unsafe {
+            (
+                distribution(d, "m1", m1, "z1", z1)?,
+                distribution(d, "m2", m2, "z2", z2)?,
+            )
+        };
+        let value = a.kl_divergence(&b)?;
+        // SAFETY: pointer checked.
+        unsafe { write1(kl, value) };
+        Ok(())
+    })
+}
+
+/// Draws n independent samples from Bingham(M, Z).
+///
+/// Deterministic: the same `seed` gives the same samples with the same library version (the
+/// generator may change between versions). Thread-safe; there is no global random state.
+///
+/// - `d`, `m`, `z`: the distribution.
+/// - `seed`: any 64-bit value.
+/// - `n`: number of samples (0 allowed: nothing is done, `x_out` may be `NULL`).
+/// - `x_out`: receives n×d row-major unit vectors. The sign of each sample is arbitrary
+///   (x and −x are equally likely).
+///
+/// Errors: `BINGHAM_ERR_INVALID_DIMENSION` (d; n*d overflow), `BINGHAM_ERR_NULL_ARGUMENT`,
+/// `BINGHAM_ERR_INVALID_ARGUMENT`, `BINGHAM_ERR_NUMERICAL`. On error nothing is written.
+///
+/// # Safety
+/// `m`: d*d and `z`: d readable doubles; `x_out`: n*d writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_sample(
+    d: usize,
+    m: *const f64,
+    z: *const f64,
+    seed: u64,
+    n: usize,
+    x_out: *mut f64,
+) -> bingham_status {
+    guard("bingham_sample", || {
+        dim(d)?;
+        let nd = len2("x_out", n, d)?;
+        need("m", m)?;
+        need("z", z)?;
+        if n > 0 {
+            need("x_out", x_out)?;
+        }
+        // SAFETY: caller contract.
+        let b = unsafe { distribution(d, "m", m, "z", z)? };
+        let mut rng = StdRng::seed_from_u64(seed);
+        // Collect into one buffer, drawing in chunks to bound the peak memory; an allocation
+        // failure (absurd n) is reported instead of aborting the process.
+        let mut flat = Vec::new();
+        flat.try_reserve_exact(nd).map_err(|_| {
+            Failure::new(
+                bingham_status::BINGHAM_ERR_NUMERICAL,
+                format!("cannot allocate memory for n = {n} samples"),
+            )
+        })?;
+        const CHUNK: usize = 4096;
+        let mut left = n;
+        while left > 0 {
+            let k = left.min(CHUNK);
+            for v in b.sample(&mut rng, k) {
+                flat.extend_from_slice(v.as_slice());
+            }
+            left -= k;
+        }
+        if flat.len() != nd || flat.iter().any(|v| !v.is_finite()) {
+            return Err(Failure::new(
+                bingham_status::BINGHAM_ERR_NUMERICAL,
+                "the sampler produced an unusable result",
+            ));
+        }
+        if n > 0 {
+            // SAFETY: pointer checked; n*d writable doubles.
+            unsafe { write(x_out, &flat) };
+        }
+        Ok(())
+    })
+}
+
+/// Shared body of the rotations.
+///
+/// # Safety
+/// Caller contract of the exported functions.
+#[allow(clippy::too_many_arguments)]
+unsafe fn rotate(
+    d: usize,
+    m: *const f64,
+    z: *const f64,
+    u: *const f64,
+    m_out: *mut f64,
+    z_out: *mut f64,
+    op: impl FnOnce(&Bingham, &[f64]) -> crate::error::Result<Bingham>,
+) -> FfiResult<()> {
+    dim(d)?;
+    need("m", m)?;
+    need("z", z)?;
+    need("u", u)?;
+    need("m_out", m_out)?;
+    need("z_out", z_out)?;
+    // SAFETY: caller contract.
+    let b = unsafe { distribution(d, "m", m, "z", z)? };
+    // SAFETY: caller contract.
+    let us = unsafe { read("u", u, d)? };
+    let r = op(&b, us)?;
+    // SAFETY: pointers checked; lengths d*d and d.
+    unsafe { write_distribution(&r, m_out, z_out) };
+    Ok(())
+}
+
+/// The distribution of `u ⊕ x` for x ~ Bingham(M, Z) and a fixed unit `u`: Bingham(L(u) M, Z).
+/// Exact. d = 2 (complex (re, im)) and d = 4 (quaternion, **scalar first** (w, x, y, z)) only.
+///
+/// - `d`: 2 or 4; `m`, `z`: the distribution; `u`: d entries, unit length
+///   (|‖u‖ − 1| ≤ `BINGHAM_UNIT_TOL`).
+/// - `m_out`, `z_out`: receive the rotated distribution (z sorted, shifted; may alias `m`, `z`).
+///
+/// Errors: `BINGHAM_ERR_INVALID_DIMENSION` (d not 2 or 4), `BINGHAM_ERR_NULL_ARGUMENT`,
+/// `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, M not orthogonal, u not unit). On error nothing is
+/// written.
+///
+/// # Safety
+/// `m`: d*d, `z` and `u`: d readable doubles; `m_out`: d*d and `z_out`: d writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_rotate_left(
+    d: usize,
+    m: *const f64,
+    z: *const f64,
+    u: *const f64,
+    m_out: *mut f64,
+    z_out: *mut f64,
+) -> bingham_status {
+    guard("bingham_rotate_left", || {
+        // SAFETY: forwarded caller contract.
+        unsafe { rotate(d, m, z, u, m_out, z_out, |b, u| b.rotate_left(u)) }
+    })
+}
+
+/// The distribution of `x ⊕ u` for x ~ Bingham(M, Z) and a fixed unit `u`: Bingham(R(u) M, Z)
+/// with `x ⊕ u = R(u) x`. Exact. d = 2 and d = 4 only; arguments, errors and safety as for
+/// `bingham_rotate_left()`.
+///
+/// # Safety
+/// `m`: d*d, `z` and `u`: d readable doubles; `m_out`: d*d and `z_out`: d writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_rotate_right(
+    d: usize,
+    m: *const f64,
+    z: *const f64,
+    u: *const f64,
+    m_out: *mut f64,
+    z_out: *mut f64,
+) -> bingham_status {
+    guard("bingham_rotate_right", || {
+        // SAFETY: forwarded caller contract.
+        unsafe { rotate(d, m, z, u, m_out, z_out, |b, u| b.rotate_right(u)) }
+    })
+}
+
+/// The mode of Bingham(M, Z): the unit principal direction with the largest z (the last column of
+/// M after sorting). The distribution is antipodally symmetric, so `-mode` is a mode as well; if
+/// the largest z is repeated, the mode is not unique and one of them is returned.
+///
+/// - `d`, `m`, `z`: the distribution; `mode`: receives d doubles, a unit vector.
+///
+/// Errors: `BINGHAM_ERR_INVALID_DIMENSION`, `BINGHAM_ERR_NULL_ARGUMENT`,
+/// `BINGHAM_ERR_INVALID_ARGUMENT`. On error nothing is written.
+///
+/// # Safety
+/// `m`: d*d and `z`: d readable doubles; `mode`: d writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_mode(
+    d: usize,
+    m: *const f64,
+    z: *const f64,
+    mode: *mut f64,
+) -> bingham_status {
+    guard("bingham_mode", || {
+        dim(d)?;
+        need("m", m)?;
+        need("z", z)?;
+        need("mode", mode)?;
+        // SAFETY: caller contract.
+        let b = unsafe { distribution(d, "m", m, "z", z)? };
+        let v = b.mode();
+        // SAFETY: pointer checked; d writable doubles.
+        unsafe { write(mode, v.as_slice()) };
+        Ok(())
+    })
+}
