@@ -6,39 +6,10 @@
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 
-use super::guard::{dim, guard, len2, need, read, write, write1, Failure, FfiResult};
+use super::args::{args, Arg, Output};
+use super::guard::{dim, guard, len2, Failure, FfiResult};
 use super::status::bingham_status;
 use crate::distribution::Bingham;
-
-/// Reads `(m, z)` (d×d row-major, length d) and builds the normalized distribution.
-///
-/// # Safety
-/// As for [`read`]: `m` points to `d*d` and `z` to `d` readable doubles (or is NULL → error).
-pub(super) unsafe fn distribution(
-    d: usize,
-    m_name: &str,
-    m: *const f64,
-    z_name: &str,
-    z: *const f64,
-) -> FfiResult<Bingham> {
-    // SAFETY: forwarded caller contract; d <= 64 so d*d cannot overflow.
-    let (ms, zs) = unsafe { (read(m_name, m, d * d)?, read(z_name, z, d)?) };
-    Bingham::from_row_major(d, ms, zs)
-        .map_err(|e| Failure::from(e).context(format_args!("(`{m_name}`, `{z_name}`)")))
-}
-
-/// Copies a distribution to the caller's `m` (d×d row-major) and `z` (length d).
-///
-/// # Safety
-/// As for [`write`]: `m` has `d*d`, `z` has `d` writable doubles, both checked non-NULL.
-pub(super) unsafe fn write_distribution(b: &Bingham, m: *mut f64, z: *mut f64) {
-    let mr = b.m_row_major();
-    // SAFETY: forwarded caller contract; lengths d*d and d.
-    unsafe {
-        write(m, &mr);
-        write(z, b.z().as_slice());
-    }
-}
 
 /// The second moment `S = E[x xᵀ] = M diag(ω) Mᵀ` of Bingham(M, Z) (the covariance, as E[x] = 0),
 /// with ω_i = ∂ log F/∂z_i; trace S = 1.
@@ -64,14 +35,12 @@ pub unsafe extern "C" fn bingham_second_moment(
 ) -> bingham_status {
     guard("bingham_second_moment", || {
         dim(d)?;
-        need("m", m)?;
-        need("z", z)?;
-        need("s", s)?;
         // SAFETY: caller contract.
-        let b = unsafe { distribution(d, "m", m, "z", z)? };
-        let sm = b.second_moment()?.transpose(); // column-major storage of the transpose = row-major
-                                                 // SAFETY: pointer checked; length d*d.
-        unsafe { write(s, sm.as_slice()) };
+        let (b, s) = unsafe { args!((m, z): bingham [d], s: out [d * d]).read()? };
+        // column-major storage of the transpose = row-major
+        let sm = b.second_moment()?.transpose();
+        // SAFETY: every input has been read; length d*d.
+        unsafe { s.write(sm.as_slice()) };
         Ok(())
     })
 }
@@ -155,52 +124,33 @@ unsafe fn binary(
     op: impl FnOnce(&Bingham, &Bingham) -> crate::error::Result<Bingham>,
 ) -> FfiResult<()> {
     dim(d)?;
-    need("m1", m1)?;
-    need("z1", z1)?;
-    need("m2", m2)?;
-    need("z2", z2)?;
-    need("m", m)?;
-    need("z", z)?;
     // SAFETY: caller contract of the exported function (lengths d*d and d).
-    let (a, b) = unsafe {
-        (
-            distribution(d, "m1", m1, "z1", z1)?,
-            distribution(d, "m2", m2, "z2", z2)?,
-        )
-    };
+    let (a, b, out) =
+        unsafe { args!((m1, z1): bingham [d], (m2, z2): bingham [d], (m, z): out bingham).read()? };
     let r = op(&a, &b)?;
-    // SAFETY: pointers checked; lengths d*d and d.
-    unsafe { write_distribution(&r, m, z) };
+    // SAFETY: every input has been read; lengths d*d and d.
+    unsafe { out.write(&r) };
     Ok(())
 }
 
-/// Shared body of `bingham_pdf` and `bingham_log_pdf`.
+/// Shared body of `bingham_pdf` and `bingham_log_pdf`; `p` is their output (n doubles, required
+/// when n > 0).
 ///
 /// # Safety
 /// Caller contract of the exported functions.
-#[allow(clippy::too_many_arguments)]
 unsafe fn pointwise(
     d: usize,
     m: *const f64,
     z: *const f64,
     n: usize,
     x: *const f64,
-    p_name: &str,
-    p: *mut f64,
+    p: impl Arg<Value = (Option<Output>,)>,
     f: impl Fn(f64) -> f64,
 ) -> FfiResult<()> {
     dim(d)?;
     let nd = len2("x", n, d)?;
-    need("m", m)?;
-    need("z", z)?;
-    if n > 0 {
-        need("x", x)?;
-        need(p_name, p)?;
-    }
     // SAFETY: caller contract.
-    let b = unsafe { distribution(d, "m", m, "z", z)? };
-    // SAFETY: caller contract.
-    let xs = unsafe { read("x", x, nd)? };
+    let ((b, xs), (p,)) = unsafe { (args!((m, z): bingham [d], x: [nd] if n > 0), p).read()? };
     let mut values = Vec::new();
     values.try_reserve_exact(n).map_err(|_| {
         Failure::new(
@@ -210,15 +160,15 @@ unsafe fn pointwise(
     })?;
     // One normalization for all points.
     let log_f = if n > 0 { b.log_normalization()? } else { 0.0 };
-    for (i, row) in xs.chunks_exact(d).enumerate() {
+    for (i, row) in xs.unwrap_or_default().chunks_exact(d).enumerate() {
         let v = b
             .log_pdf_given(row, log_f)
             .map_err(|e| Failure::from(e).context(format_args!("x row {i}")))?;
         values.push(f(v));
     }
-    if n > 0 {
-        // SAFETY: p checked non-NULL; n writable doubles.
-        unsafe { write(p, &values) };
+    if let Some(p) = p {
+        // SAFETY: every input has been read; n values.
+        unsafe { p.write(&values) };
     }
     Ok(())
 }
@@ -249,7 +199,7 @@ pub unsafe extern "C" fn bingham_pdf(
 ) -> bingham_status {
     guard("bingham_pdf", || {
         // SAFETY: forwarded caller contract.
-        unsafe { pointwise(d, m, z, n, x, "p", p, f64::exp) }
+        unsafe { pointwise(d, m, z, n, x, args!(p: out [n] if n > 0), f64::exp) }
     })
 }
 
@@ -269,7 +219,7 @@ pub unsafe extern "C" fn bingham_log_pdf(
 ) -> bingham_status {
     guard("bingham_log_pdf", || {
         // SAFETY: forwarded caller contract.
-        unsafe { pointwise(d, m, z, n, x, "log_p", log_p, |v| v) }
+        unsafe { pointwise(d, m, z, n, x, args!(log_p: out [n] if n > 0), |v| v) }
     })
 }
 
@@ -293,14 +243,11 @@ pub unsafe extern "C" fn bingham_entropy(
 ) -> bingham_status {
     guard("bingham_entropy", || {
         dim(d)?;
-        need("m", m)?;
-        need("z", z)?;
-        need("h", h)?;
         // SAFETY: caller contract.
-        let b = unsafe { distribution(d, "m", m, "z", z)? };
+        let (b, h) = unsafe { args!((m, z): bingham [d], h: out).read()? };
         let value = b.entropy()?;
-        // SAFETY: pointer checked.
-        unsafe { write1(h, value) };
+        // SAFETY: every input has been read.
+        unsafe { h.set(value) };
         Ok(())
     })
 }
@@ -326,21 +273,12 @@ pub unsafe extern "C" fn bingham_kl_divergence(
 ) -> bingham_status {
     guard("bingham_kl_divergence", || {
         dim(d)?;
-        need("m1", m1)?;
-        need("z1", z1)?;
-        need("m2", m2)?;
-        need("z2", z2)?;
-        need("kl", kl)?;
         // SAFETY: caller contract.
-        let (a, b) = unsafe {
-            (
-                distribution(d, "m1", m1, "z1", z1)?,
-                distribution(d, "m2", m2, "z2", z2)?,
-            )
-        };
+        let (a, b, kl) =
+            unsafe { args!((m1, z1): bingham [d], (m2, z2): bingham [d], kl: out).read()? };
         let value = a.kl_divergence(&b)?;
-        // SAFETY: pointer checked.
-        unsafe { write1(kl, value) };
+        // SAFETY: every input has been read.
+        unsafe { kl.set(value) };
         Ok(())
     })
 }
@@ -373,13 +311,8 @@ pub unsafe extern "C" fn bingham_sample(
     guard("bingham_sample", || {
         dim(d)?;
         let nd = len2("x_out", n, d)?;
-        need("m", m)?;
-        need("z", z)?;
-        if n > 0 {
-            need("x_out", x_out)?;
-        }
         // SAFETY: caller contract.
-        let b = unsafe { distribution(d, "m", m, "z", z)? };
+        let (b, x_out) = unsafe { args!((m, z): bingham [d], x_out: out [nd] if n > 0).read()? };
         let mut rng = StdRng::seed_from_u64(seed);
         // Collect into one buffer, drawing in chunks to bound the peak memory; an allocation
         // failure (absurd n) is reported instead of aborting the process.
@@ -405,9 +338,9 @@ pub unsafe extern "C" fn bingham_sample(
                 "the sampler produced an unusable result",
             ));
         }
-        if n > 0 {
-            // SAFETY: pointer checked; n*d writable doubles.
-            unsafe { write(x_out, &flat) };
+        if let Some(x_out) = x_out {
+            // SAFETY: every input has been read; n*d values.
+            unsafe { x_out.write(&flat) };
         }
         Ok(())
     })
@@ -417,7 +350,6 @@ pub unsafe extern "C" fn bingham_sample(
 ///
 /// # Safety
 /// Caller contract of the exported functions.
-#[allow(clippy::too_many_arguments)]
 unsafe fn rotate(
     d: usize,
     m: *const f64,
@@ -428,18 +360,12 @@ unsafe fn rotate(
     op: impl FnOnce(&Bingham, &[f64]) -> crate::error::Result<Bingham>,
 ) -> FfiResult<()> {
     dim(d)?;
-    need("m", m)?;
-    need("z", z)?;
-    need("u", u)?;
-    need("m_out", m_out)?;
-    need("z_out", z_out)?;
     // SAFETY: caller contract.
-    let b = unsafe { distribution(d, "m", m, "z", z)? };
-    // SAFETY: caller contract.
-    let us = unsafe { read("u", u, d)? };
+    let (b, us, out) =
+        unsafe { args!((m, z): bingham [d], u: [d], (m_out, z_out): out bingham).read()? };
     let r = op(&b, us)?;
-    // SAFETY: pointers checked; lengths d*d and d.
-    unsafe { write_distribution(&r, m_out, z_out) };
+    // SAFETY: every input has been read; lengths d*d and d.
+    unsafe { out.write(&r) };
     Ok(())
 }
 
@@ -512,14 +438,11 @@ pub unsafe extern "C" fn bingham_mode(
 ) -> bingham_status {
     guard("bingham_mode", || {
         dim(d)?;
-        need("m", m)?;
-        need("z", z)?;
-        need("mode", mode)?;
         // SAFETY: caller contract.
-        let b = unsafe { distribution(d, "m", m, "z", z)? };
+        let (b, mode) = unsafe { args!((m, z): bingham [d], mode: out [d]).read()? };
         let v = b.mode();
-        // SAFETY: pointer checked; d writable doubles.
-        unsafe { write(mode, v.as_slice()) };
+        // SAFETY: every input has been read; d values.
+        unsafe { mode.write(v.as_slice()) };
         Ok(())
     })
 }

@@ -4,8 +4,8 @@
 
 use nalgebra::DMatrix;
 
-use super::distribution::write_distribution;
-use super::guard::{dim, guard, len2, need, optional, read, Failure};
+use super::args::{args, Arg};
+use super::guard::{dim, guard, len2, Failure};
 use super::status::bingham_status;
 use crate::mle::{mle_from_samples, mle_from_second_moment};
 
@@ -37,14 +37,11 @@ pub unsafe extern "C" fn bingham_mle(
 ) -> bingham_status {
     guard("bingham_mle", || {
         dim(d)?;
-        need("s", s)?;
-        need("m", m)?;
-        need("z", z)?;
         // SAFETY: caller contract.
-        let ss = unsafe { read("s", s, d * d)? };
+        let (ss, out) = unsafe { args!(s: [d * d], (m, z): out bingham).read()? };
         let b = mle_from_second_moment(&DMatrix::from_row_slice(d, d, ss))?;
-        // SAFETY: pointers checked; lengths d*d and d.
-        unsafe { write_distribution(&b, m, z) };
+        // SAFETY: every input has been read; lengths d*d and d.
+        unsafe { out.write(&b) };
         Ok(())
     })
 }
@@ -81,21 +78,11 @@ pub unsafe extern "C" fn bingham_mle_samples(
         if n == 0 {
             return Err(Failure::argument("n = 0: at least one sample is needed"));
         }
-        need("x", x)?;
-        let has_w = optional("w", w)?;
-        need("m", m)?;
-        need("z", z)?;
         // SAFETY: caller contract.
-        let xs = unsafe { read("x", x, nd)? };
-        let ws = if has_w {
-            // SAFETY: caller contract.
-            Some(unsafe { read("w", w, n)? })
-        } else {
-            None
-        };
+        let (xs, ws, out) = unsafe { args!(x: [nd], w: opt [n], (m, z): out bingham).read()? };
         let b = mle_from_samples(d, xs, ws)?;
-        // SAFETY: pointers checked; lengths d*d and d.
-        unsafe { write_distribution(&b, m, z) };
+        // SAFETY: every input has been read; lengths d*d and d.
+        unsafe { out.write(&b) };
         Ok(())
     })
 }

@@ -5,6 +5,8 @@
 //! - [`status`]: `bingham_status` and `bingham_status_str`.
 //! - [`guard`]: the panic guard every export runs in, pointer/length checks, copying in and out,
 //!   and the thread-local last error message (`bingham_last_error_message`).
+//! - `args` (crate-internal): the argument lists of the exports (`args!`): every pointer
+//!   checked before any array is read, outputs written only after success.
 //! - [`normalization`]: the normalization constant (`bingham_normalization_constant`, …).
 //! - [`mle`]: maximum-likelihood fits (`bingham_mle`, `bingham_mle_samples`).
 //! - [`distribution`]: the functions of a distribution (`bingham_second_moment`,
@@ -36,6 +38,8 @@ pub mod version;
 pub mod status;
 
 pub mod guard;
+
+pub(crate) mod args;
 
 pub mod normalization;
 

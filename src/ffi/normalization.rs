@@ -4,7 +4,8 @@
 //! pointers, read `z`, call the core, copy the results out. No mathematics here beyond
 //! `F = exp(log F)` and `∂F/∂z_i = F ∂ log F/∂z_i`.
 
-use super::guard::{dim, guard, need, optional, read, write, write1, Failure, FfiResult};
+use super::args::{args, Arg};
+use super::guard::{dim, guard, Failure, FfiResult};
 use super::status::bingham_status;
 use crate::normalization::{log_normalization_into, Method};
 
@@ -20,18 +21,15 @@ unsafe fn log_normalization_ffi(
     method: Method,
 ) -> FfiResult<()> {
     dim(d)?;
-    need("z", z)?;
-    need("log_f", log_f)?;
-    let want_grad = optional("dlog_f", dlog_f)?;
-    // SAFETY: caller contract.
-    let zs = unsafe { read("z", z, d)? };
+    // SAFETY: forwarded caller contract.
+    let (zs, log_f, dlog_f) = unsafe { args!(z: [d], log_f: out, dlog_f: opt out [d]).read()? };
     let mut grad = [0.0; crate::error::MAX_DIM];
-    let lf = log_normalization_into(zs, method, want_grad.then_some(&mut grad[..d]), None)?;
-    // SAFETY: pointers checked; lengths 1 and d per the contract.
+    let lf = log_normalization_into(zs, method, dlog_f.is_some().then_some(&mut grad[..d]), None)?;
+    // SAFETY: every input has been read; lengths 1 and d.
     unsafe {
-        write1(log_f, lf);
-        if want_grad {
-            write(dlog_f, &grad[..d]);
+        log_f.set(lf);
+        if let Some(dlog_f) = dlog_f {
+            dlog_f.write(&grad[..d]);
         }
     }
     Ok(())
@@ -68,11 +66,8 @@ pub unsafe extern "C" fn bingham_normalization_constant(
 ) -> bingham_status {
     guard("bingham_normalization_constant", || {
         dim(d)?;
-        need("z", z)?;
-        need("f", f)?;
-        let want_grad = optional("df", df)?;
         // SAFETY: caller contract.
-        let zs = unsafe { read("z", z, d)? };
+        let (zs, f, df) = unsafe { args!(z: [d], f: out, df: opt out [d]).read()? };
         let mut grad = [0.0; crate::error::MAX_DIM];
         let lf = log_normalization_into(zs, Method::Exact, Some(&mut grad[..d]), None)?;
         let value = lf.exp();
@@ -86,11 +81,11 @@ pub unsafe extern "C" fn bingham_normalization_constant(
             ));
         }
         let dfv: Vec<f64> = grad[..d].iter().map(|w| value * w).collect();
-        // SAFETY: pointers checked; lengths 1 and d per the contract.
+        // SAFETY: every input has been read; lengths 1 and d.
         unsafe {
-            write1(f, value);
-            if want_grad {
-                write(df, &dfv);
+            f.set(value);
+            if let Some(df) = df {
+                df.write(&dfv);
             }
         }
         Ok(())
@@ -176,22 +171,19 @@ pub unsafe extern "C" fn bingham_log_normalization_hessian(
 ) -> bingham_status {
     guard("bingham_log_normalization_hessian", || {
         dim(d)?;
-        need("z", z)?;
-        need("log_f", log_f)?;
-        let want_grad = optional("dlog_f", dlog_f)?;
-        need("d2log_f", d2log_f)?;
         // SAFETY: caller contract.
-        let zs = unsafe { read("z", z, d)? };
+        let (zs, log_f, dlog_f, d2log_f) =
+            unsafe { args!(z: [d], log_f: out, dlog_f: opt out [d], d2log_f: out [d * d]).read()? };
         let mut grad = vec![0.0; d];
         let mut hess = vec![0.0; d * d];
         let lf = log_normalization_into(zs, Method::Exact, Some(&mut grad), Some(&mut hess))?;
-        // SAFETY: pointers checked; lengths 1, d, d*d per the contract.
+        // SAFETY: every input has been read; lengths 1, d, d*d.
         unsafe {
-            write1(log_f, lf);
-            if want_grad {
-                write(dlog_f, &grad);
+            log_f.set(lf);
+            if let Some(dlog_f) = dlog_f {
+                dlog_f.write(&grad);
             }
-            write(d2log_f, &hess);
+            d2log_f.write(&hess);
         }
         Ok(())
     })

@@ -5,9 +5,10 @@
 //! (`bingham_angular_spread`). Thin wrappers: check `d` and the pointers, read the inputs, call
 //! the core, copy the results out.
 
-use super::distribution::{distribution, write_distribution};
-use super::guard::{guard, need, read, write, Failure};
+use super::args::{args, Arg};
+use super::guard::{guard, Failure};
 use super::status::bingham_status;
+use crate::observation::{angular_spread, noise_from_angle_std, vector_observation};
 
 /// The likelihood of a measured direction as a Bingham distribution of the orientation (d = 4).
 ///
@@ -39,15 +40,11 @@ pub unsafe extern "C" fn bingham_vector_observation(
     z: *mut f64,
 ) -> bingham_status {
     guard("bingham_vector_observation", || {
-        need("body", body)?;
-        need("reference", reference)?;
-        need("m", m)?;
-        need("z", z)?;
         // SAFETY: caller contract; 3 doubles each.
-        let (b, r) = unsafe { (read("body", body, 3)?, read("reference", reference, 3)?) };
-        let obs = crate::observation::vector_observation(b, r, kappa)?;
-        // SAFETY: pointers checked; lengths 16 and 4.
-        unsafe { write_distribution(&obs, m, z) };
+        let (b, r, out) = unsafe { args!(body: [3], reference: [3], (m, z): out bingham).read()? };
+        let obs = vector_observation(b, r, kappa)?;
+        // SAFETY: every input has been read; lengths 16 and 4.
+        unsafe { out.write(&obs) };
         Ok(())
     })
 }
@@ -84,11 +81,11 @@ pub unsafe extern "C" fn bingham_noise_from_angle_std(
                 "rotation noise exists for d = 2 and d = 4, got d = {d}"
             )));
         }
-        need("m", m)?;
-        need("z", z)?;
-        let b = crate::observation::noise_from_angle_std(d, sigma)?;
-        // SAFETY: pointers checked; lengths d*d and d.
-        unsafe { write_distribution(&b, m, z) };
+        // SAFETY: caller contract.
+        let (out,) = unsafe { args!((m, z): out bingham).read()? };
+        let b = noise_from_angle_std(d, sigma)?;
+        // SAFETY: lengths d*d and d.
+        unsafe { out.write(&b) };
         Ok(())
     })
 }
@@ -125,14 +122,11 @@ pub unsafe extern "C" fn bingham_angular_spread(
                 "the angular spread exists for d = 2 and d = 4, got d = {d}"
             )));
         }
-        need("m", m)?;
-        need("z", z)?;
-        need("spread", spread)?;
         // SAFETY: caller contract.
-        let b = unsafe { distribution(d, "m", m, "z", z)? };
-        let s = crate::observation::angular_spread(&b)?;
-        // SAFETY: pointer checked; length d.
-        unsafe { write(spread, &s) };
+        let (b, spread) = unsafe { args!((m, z): bingham [d], spread: out [d]).read()? };
+        let s = angular_spread(&b)?;
+        // SAFETY: every input has been read; length d.
+        unsafe { spread.write(&s) };
         Ok(())
     })
 }
