@@ -498,6 +498,40 @@ impl<'a, const K: usize> Arg for RowsOut<'a, K> {
     }
 }
 
+/// Checked outputs that receive a result (see [`store`](Store::store)).
+pub(crate) trait Store<V> {
+    /// Writes `value` to the caller.
+    ///
+    /// # Safety
+    /// As for [`Output::write`].
+    unsafe fn store(self, value: V);
+}
+
+impl Store<()> for () {
+    unsafe fn store(self, (): ()) {}
+}
+
+impl<T> Store<T> for Place<T> {
+    unsafe fn store(self, value: T) {
+        // SAFETY: forwarded contract.
+        unsafe { self.set(value) }
+    }
+}
+
+impl Store<Bingham> for BinghamOutput {
+    unsafe fn store(self, value: Bingham) {
+        // SAFETY: forwarded contract.
+        unsafe { self.write(&value) }
+    }
+}
+
+impl<V, S: Store<V>> Store<V> for (S,) {
+    unsafe fn store(self, value: V) {
+        // SAFETY: forwarded contract.
+        unsafe { self.0.store(value) }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,7 +6,7 @@
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 
-use super::args::{args, Arg, Output};
+use super::args::{args, Arg, Output, Store};
 use super::guard::{dim, guard, len2, Failure, FfiResult};
 use super::status::bingham_status;
 use crate::distribution::Bingham;
@@ -71,8 +71,9 @@ pub unsafe extern "C" fn bingham_multiply(
     z: *mut f64,
 ) -> bingham_status {
     guard("bingham_multiply", || {
+        let out = args!((m, z): out bingham);
         // SAFETY: forwarded caller contract.
-        unsafe { binary(d, m1, z1, m2, z2, m, z, |a, b| a.multiply(b)) }
+        unsafe { binary(d, m1, z1, m2, z2, out, Bingham::multiply) }
     })
 }
 
@@ -103,33 +104,37 @@ pub unsafe extern "C" fn bingham_compose(
     z: *mut f64,
 ) -> bingham_status {
     guard("bingham_compose", || {
+        let out = args!((m, z): out bingham);
         // SAFETY: forwarded caller contract.
-        unsafe { binary(d, m1, z1, m2, z2, m, z, |a, b| a.compose(b)) }
+        unsafe { binary(d, m1, z1, m2, z2, out, Bingham::compose) }
     })
 }
 
-/// Shared body of `bingham_multiply` and `bingham_compose`.
+/// Shared body of the functions of two distributions (`bingham_multiply`, `bingham_compose`,
+/// `bingham_kl_divergence`): checks `d`, the pointers of both distributions and then those of
+/// `out`, reads the distributions, and stores the result of `op` in `out`.
 ///
 /// # Safety
 /// Caller contract of the exported functions.
-#[allow(clippy::too_many_arguments)]
-unsafe fn binary(
+unsafe fn binary<O: Arg, V>(
     d: usize,
     m1: *const f64,
     z1: *const f64,
     m2: *const f64,
     z2: *const f64,
-    m: *mut f64,
-    z: *mut f64,
-    op: impl FnOnce(&Bingham, &Bingham) -> crate::error::Result<Bingham>,
-) -> FfiResult<()> {
+    out: O,
+    op: impl FnOnce(&Bingham, &Bingham) -> crate::error::Result<V>,
+) -> FfiResult<()>
+where
+    O::Value: Store<V>,
+{
     dim(d)?;
     // SAFETY: caller contract of the exported function (lengths d*d and d).
-    let (a, b, out) =
-        unsafe { args!((m1, z1): bingham [d], (m2, z2): bingham [d], (m, z): out bingham).read()? };
+    let ((a, b), out) =
+        unsafe { (args!((m1, z1): bingham [d], (m2, z2): bingham [d]), out).read()? };
     let r = op(&a, &b)?;
-    // SAFETY: every input has been read; lengths d*d and d.
-    unsafe { out.write(&r) };
+    // SAFETY: every input has been read.
+    unsafe { out.store(r) };
     Ok(())
 }
 
@@ -272,14 +277,8 @@ pub unsafe extern "C" fn bingham_kl_divergence(
     kl: *mut f64,
 ) -> bingham_status {
     guard("bingham_kl_divergence", || {
-        dim(d)?;
-        // SAFETY: caller contract.
-        let (a, b, kl) =
-            unsafe { args!((m1, z1): bingham [d], (m2, z2): bingham [d], kl: out).read()? };
-        let value = a.kl_divergence(&b)?;
-        // SAFETY: every input has been read.
-        unsafe { kl.set(value) };
-        Ok(())
+        // SAFETY: forwarded caller contract.
+        unsafe { binary(d, m1, z1, m2, z2, args!(kl: out), Bingham::kl_divergence) }
     })
 }
 
