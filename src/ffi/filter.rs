@@ -5,8 +5,8 @@
 
 use std::os::raw::{c_int, c_void};
 
-use super::args::{args, Arg};
-use super::guard::{free_handle, guard, handle, handle_mut, Failure};
+use super::args::{args, Arg, ArrayIn, Store};
+use super::guard::{free_handle, guard, handle, handle_mut, Failure, FfiResult};
 use super::status::bingham_status;
 use crate::filter::BinghamFilter;
 
@@ -231,6 +231,33 @@ pub unsafe extern "C" fn bingham_filter_mode(
     })
 }
 
+/// Shared body of the steps that read a noise `(m_*, z_*)` (d×d row-major and d doubles):
+/// `bingham_filter_predict`, `_predict_rotation`, `_predict_nonlinear`, `_update` and
+/// `_log_likelihood`. Checks the pointers of `before` (the arguments before the noise: the
+/// rotation or the measurement), of the noise and of `after` (the output, if any), in this
+/// order, then reads them in the same order, runs `step` and stores its result in `after`.
+///
+/// # Safety
+/// The caller's contract for the arguments (the noise: d*d and d readable doubles).
+unsafe fn noise_step<B: Arg, A: Arg, R>(
+    d: usize,
+    before: B,
+    [(m_name, m), (z_name, z)]: [(&'static str, *const f64); 2],
+    after: A,
+    step: impl FnOnce(B::Value, &[f64], &[f64]) -> crate::error::Result<R>,
+) -> FfiResult<()>
+where
+    A::Value: Store<R>,
+{
+    let noise = (ArrayIn::new(m_name, m, d * d), ArrayIn::new(z_name, z, d));
+    // SAFETY: forwarded contract.
+    let (before, (ms, zs), after) = unsafe { (before, noise, after).read()? };
+    let value = step(before, ms, zs)?;
+    // SAFETY: every input has been read.
+    unsafe { after.store(value) };
+    Ok(())
+}
+
 /// Prediction step: the state becomes the distribution of `x (+) w`, `w ~ Bingham(m_w, z_w)`
 /// (JAIF Sec. 6.1: exact second moment of the composition, then the moment-matched Bingham).
 ///
@@ -257,11 +284,13 @@ pub unsafe extern "C" fn bingham_filter_predict(
     guard("bingham_filter_predict", || {
         // SAFETY: caller contract.
         let filter = unsafe { handle_mut("f", f)? };
-        let d = filter.inner.dim();
-        // SAFETY: caller contract; lengths d*d and d.
-        let (ms, zs) = unsafe { args!(m_w: [d * d], z_w: [d]).read()? };
-        filter.inner.predict(ms, zs)?;
-        Ok(())
+        let noise = [("m_w", m_w), ("z_w", z_w)];
+        // SAFETY: caller contract.
+        unsafe {
+            noise_step(filter.inner.dim(), (), noise, (), |(), m, z| {
+                filter.inner.predict(m, z)
+            })
+        }
     })
 }
 
@@ -290,10 +319,13 @@ pub unsafe extern "C" fn bingham_filter_predict_rotation(
         // SAFETY: caller contract.
         let filter = unsafe { handle_mut("f", f)? };
         let d = filter.inner.dim();
-        // SAFETY: caller contract; lengths d, d*d and d.
-        let (us, ms, zs) = unsafe { args!(u: [d], m_w: [d * d], z_w: [d]).read()? };
-        filter.inner.predict_rotation(us, ms, zs)?;
-        Ok(())
+        let noise = [("m_w", m_w), ("z_w", z_w)];
+        // SAFETY: caller contract.
+        unsafe {
+            noise_step(d, args!(u: [d]), noise, (), |(u,), m, z| {
+                filter.inner.predict_rotation(u, m, z)
+            })
+        }
     })
 }
 
@@ -325,10 +357,13 @@ pub unsafe extern "C" fn bingham_filter_update(
         // SAFETY: caller contract.
         let filter = unsafe { handle_mut("f", f)? };
         let d = filter.inner.dim();
-        // SAFETY: caller contract; lengths d, d*d and d.
-        let (ys, ms, zs) = unsafe { args!(measurement: [d], m_v: [d * d], z_v: [d]).read()? };
-        filter.inner.update(ys, ms, zs)?;
-        Ok(())
+        let noise = [("m_v", m_v), ("z_v", z_v)];
+        // SAFETY: caller contract.
+        unsafe {
+            noise_step(d, args!(measurement: [d]), noise, (), |(y,), m, z| {
+                filter.inner.update(y, m, z)
+            })
+        }
     })
 }
 
@@ -362,13 +397,17 @@ pub unsafe extern "C" fn bingham_filter_log_likelihood(
         // SAFETY: caller contract.
         let filter = unsafe { handle("f", f)? };
         let d = filter.inner.dim();
-        // SAFETY: caller contract; lengths d, d*d and d, one writable double.
-        let (ys, ms, zs, out) =
-            unsafe { args!(measurement: [d], m_v: [d * d], z_v: [d], out: out).read()? };
-        let value = filter.inner.log_likelihood(ys, ms, zs)?;
-        // SAFETY: every input has been read.
-        unsafe { out.set(value) };
-        Ok(())
+        let noise = [("m_v", m_v), ("z_v", z_v)];
+        // SAFETY: caller contract.
+        unsafe {
+            noise_step(
+                d,
+                args!(measurement: [d]),
+                noise,
+                args!(out: out),
+                |(y,), m, z| filter.inner.log_likelihood(y, m, z),
+            )
+        }
     })
 }
 
@@ -526,10 +565,7 @@ pub unsafe extern "C" fn bingham_filter_predict_nonlinear(
     guard("bingham_filter_predict_nonlinear", || {
         // SAFETY: caller contract.
         let filter = unsafe { handle_mut("f", f)? };
-        let d = filter.inner.dim();
         let callback = r#fn.ok_or_else(|| Failure::null("fn"))?;
-        // SAFETY: caller contract; lengths d*d and d.
-        let (ms, zs) = unsafe { args!(m_w: [d * d], z_w: [d]).read()? };
         let transition = |x: &[f64], out: &mut [f64]| -> Result<(), String> {
             out.fill(f64::NAN);
             // SAFETY: `x` and `out` are library-owned arrays of d doubles, valid for the call;
@@ -541,8 +577,13 @@ pub unsafe extern "C" fn bingham_filter_predict_nonlinear(
                 Ok(())
             }
         };
-        filter.inner.predict_nonlinear(transition, ms, zs)?;
-        Ok(())
+        let noise = [("m_w", m_w), ("z_w", z_w)];
+        // SAFETY: caller contract.
+        unsafe {
+            noise_step(filter.inner.dim(), (), noise, (), |(), m, z| {
+                filter.inner.predict_nonlinear(transition, m, z)
+            })
+        }
     })
 }
 
