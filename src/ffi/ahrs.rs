@@ -1,7 +1,7 @@
 //! The AHRS behind the opaque handle `bingham_ahrs` (the C side of [`crate::ahrs::Ahrs`]).
 //! Thin wrappers: check pointers, read the samples, call the core, copy results out.
 
-use super::args::{args, Arg};
+use super::args::{args, get_into, Arg, Fill};
 use super::guard::{free_handle, guard, handle, handle_mut, FfiResult};
 use super::status::bingham_status;
 use crate::ahrs::{Ahrs, AhrsParams};
@@ -240,6 +240,26 @@ unsafe fn batch(
     Ok(())
 }
 
+/// Shared body of the getters: borrows the AHRS, checks the outputs `outs`, lets `get` compute
+/// their values (one after another, in the order of `outs`) and only then writes them.
+///
+/// # Safety
+/// `a`: NULL or a live handle; the caller's contract for `outs`.
+unsafe fn getter<O>(
+    a: *const bingham_ahrs,
+    outs: O,
+    get: impl FnOnce(&Ahrs, &mut [f64]) -> crate::error::Result<()>,
+) -> FfiResult<()>
+where
+    O: Arg,
+    O::Value: Fill,
+{
+    // SAFETY: caller contract.
+    let ahrs = unsafe { handle("a", a)? };
+    // SAFETY: forwarded contract.
+    unsafe { get_into(outs, |v| get(&ahrs.inner, v)) }
+}
+
 /// The current orientation estimate (the mode of the Bingham state): sensor → world (ENU),
 /// scalar first `(w, x, y, z)`, with w ≥ 0. Before the first sample: the identity.
 ///
@@ -253,13 +273,13 @@ pub unsafe extern "C" fn bingham_ahrs_quaternion(
     q: *mut f64,
 ) -> bingham_status {
     guard("bingham_ahrs_quaternion", || {
-        // SAFETY: caller contract.
-        let ahrs = unsafe { handle("a", a)? };
-        // SAFETY: caller contract; 4 writable doubles.
-        let (q,) = unsafe { args!(q: out [4]).read()? };
-        // SAFETY: checked output; 4 values.
-        unsafe { q.write(&ahrs.inner.quaternion()) };
-        Ok(())
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            getter(a, args!(q: out [4]), |ahrs, v| {
+                v.copy_from_slice(&ahrs.quaternion());
+                Ok(())
+            })
+        }
     })
 }
 
@@ -277,18 +297,13 @@ pub unsafe extern "C" fn bingham_ahrs_state(
     z: *mut f64,
 ) -> bingham_status {
     guard("bingham_ahrs_state", || {
-        // SAFETY: caller contract.
-        let ahrs = unsafe { handle("a", a)? };
-        // SAFETY: caller contract; 16 and 4 writable doubles.
-        let (m, z) = unsafe { args!(m: out [16], z: out [4]).read()? };
-        let (mut mm, mut zz) = ([0.0; 16], [0.0; 4]);
-        ahrs.inner.state_into(&mut mm, &mut zz)?;
-        // SAFETY: checked outputs; 16 and 4 values.
+        // SAFETY: forwarded caller contract.
         unsafe {
-            m.write(&mm);
-            z.write(&zz);
+            getter(a, args!(m: out [16], z: out [4]), |ahrs, v| {
+                let (m, z) = v.split_at_mut(16);
+                ahrs.state_into(m, z)
+            })
         }
-        Ok(())
     })
 }
 
@@ -340,15 +355,12 @@ pub unsafe extern "C" fn bingham_ahrs_angular_spread(
     spread: *mut f64,
 ) -> bingham_status {
     guard("bingham_ahrs_angular_spread", || {
-        // SAFETY: caller contract.
-        let ahrs = unsafe { handle("a", a)? };
-        // SAFETY: caller contract; 4 writable doubles.
-        let (spread,) = unsafe { args!(spread: out [4]).read()? };
-        let mut out = [0.0; 4];
-        ahrs.inner.angular_spread(&mut out)?;
-        // SAFETY: checked output; 4 values.
-        unsafe { spread.write(&out) };
-        Ok(())
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            getter(a, args!(spread: out [4]), |ahrs, v| {
+                ahrs.angular_spread(v.try_into().expect("4 values"))
+            })
+        }
     })
 }
 
@@ -364,12 +376,12 @@ pub unsafe extern "C" fn bingham_ahrs_gyro_bias(
     bias: *mut f64,
 ) -> bingham_status {
     guard("bingham_ahrs_gyro_bias", || {
-        // SAFETY: caller contract.
-        let ahrs = unsafe { handle("a", a)? };
-        // SAFETY: caller contract; 3 writable doubles.
-        let (bias,) = unsafe { args!(bias: out [3]).read()? };
-        // SAFETY: checked output; 3 values.
-        unsafe { bias.write(&ahrs.inner.gyro_bias()) };
-        Ok(())
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            getter(a, args!(bias: out [3]), |ahrs, v| {
+                v.copy_from_slice(&ahrs.gyro_bias());
+                Ok(())
+            })
+        }
     })
 }

@@ -303,14 +303,18 @@ impl Arg for ArrayOut {
     }
 }
 
-/// A checked output array of `len` doubles.
+/// A checked output array of `len()` doubles.
 pub(crate) struct Output {
     p: *mut f64,
     len: usize,
 }
 
 impl Output {
-    /// Copies the result `src` (at most `len` doubles) to the caller.
+    pub(crate) fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Copies the result `src` (at most `len()` doubles) to the caller.
     ///
     /// # Safety
     /// Call only after every input has been read and the computation has succeeded (outputs may
@@ -532,6 +536,72 @@ impl<V, S: Store<V>> Store<V> for (S,) {
     }
 }
 
+/// Checked output arrays filled from consecutive pieces of one library buffer (see
+/// [`get_into`]).
+pub(crate) trait Fill {
+    /// The number of doubles of all the outputs together.
+    fn total(&self) -> usize;
+
+    /// Writes `values`: the first `len()` to the first output, the next to the second, ….
+    ///
+    /// # Safety
+    /// As for [`Output::write`].
+    unsafe fn fill(self, values: &[f64]);
+}
+
+impl Fill for (Output,) {
+    fn total(&self) -> usize {
+        self.0.len()
+    }
+
+    unsafe fn fill(self, values: &[f64]) {
+        // SAFETY: forwarded contract.
+        unsafe { self.0.write(values) }
+    }
+}
+
+impl Fill for (Output, Output) {
+    fn total(&self) -> usize {
+        self.0.len() + self.1.len()
+    }
+
+    unsafe fn fill(self, values: &[f64]) {
+        let (a, b) = values.split_at(self.0.len());
+        // SAFETY: forwarded contract.
+        unsafe {
+            self.0.write(a);
+            self.1.write(b);
+        }
+    }
+}
+
+/// The most doubles a getter returns: a 4×4 M and 4 concentrations.
+const GET_MAX: usize = 20;
+
+/// Shared body of the getters of the handles: checks the output pointers `outs`, lets `get`
+/// compute their values into a library buffer (the outputs' values one after another, in the
+/// order of `outs`) and only then copies them out, so nothing is written on error.
+///
+/// # Safety
+/// The caller's contract for `outs` (see [`Arg::read`]).
+pub(crate) unsafe fn get_into<O>(
+    outs: O,
+    get: impl FnOnce(&mut [f64]) -> crate::error::Result<()>,
+) -> FfiResult<()>
+where
+    O: Arg,
+    O::Value: Fill,
+{
+    // SAFETY: forwarded contract.
+    let outs = unsafe { outs.read()? };
+    let mut buf = [0.0; GET_MAX];
+    let values = &mut buf[..outs.total()];
+    get(values)?;
+    // SAFETY: forwarded contract; the values are library-owned.
+    unsafe { outs.fill(values) };
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -603,5 +673,24 @@ mod tests {
         // SAFETY: 4 readable doubles.
         let (r,) = unsafe { args!(pp: rows [2; 2]).read() }.unwrap();
         assert_eq!(r, &[[0.0; 2]; 2]);
+    }
+
+    #[test]
+    fn getters_write_only_on_success() {
+        let (mut a, mut b) = ([7.0; 3], [7.0; 1]);
+        let (ap, bp) = (a.as_mut_ptr(), b.as_mut_ptr());
+        // SAFETY: 3 and 1 writable doubles.
+        unsafe {
+            let fail = get_into(args!(ap: out [3], bp: out [1]), |_| {
+                Err(crate::error::Error::Numerical("no".into()))
+            });
+            assert_eq!(fail.unwrap_err().status, BINGHAM_ERR_NUMERICAL);
+            get_into(args!(ap: out [3], bp: out [1]), |v| {
+                v.copy_from_slice(&[1.0, 2.0, 3.0, 4.0]);
+                Ok(())
+            })
+            .unwrap();
+        }
+        assert_eq!((a, b), ([1.0, 2.0, 3.0], [4.0]));
     }
 }

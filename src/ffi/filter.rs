@@ -5,7 +5,7 @@
 
 use std::os::raw::{c_int, c_void};
 
-use super::args::{args, Arg, ArrayIn, Store};
+use super::args::{args, get_into, Arg, ArrayIn, Store};
 use super::guard::{free_handle, guard, handle, handle_mut, Failure, FfiResult};
 use super::status::bingham_status;
 use crate::filter::BinghamFilter;
@@ -191,16 +191,12 @@ pub unsafe extern "C" fn bingham_filter_get_state(
         let filter = unsafe { handle("f", f)? };
         let d = filter.inner.dim();
         // SAFETY: caller contract; d*d and d writable doubles.
-        let (m, z) = unsafe { args!(m: out [d * d], z: out [d]).read()? };
-        let mut mb = [0.0; 16];
-        let mut zb = [0.0; 4];
-        filter.inner.state_into(&mut mb[..d * d], &mut zb[..d])?;
-        // SAFETY: every input has been read; d*d and d values.
         unsafe {
-            m.write(&mb[..d * d]);
-            z.write(&zb[..d]);
+            get_into(args!(m: out [d * d], z: out [d]), |v| {
+                let (m, z) = v.split_at_mut(d * d);
+                filter.inner.state_into(m, z)
+            })
         }
-        Ok(())
     })
 }
 
@@ -222,12 +218,7 @@ pub unsafe extern "C" fn bingham_filter_mode(
         let filter = unsafe { handle("f", f)? };
         let d = filter.inner.dim();
         // SAFETY: caller contract; d writable doubles.
-        let (mode,) = unsafe { args!(mode: out [d]).read()? };
-        let mut v = [0.0; 4];
-        filter.inner.mode_into(&mut v[..d])?;
-        // SAFETY: every input has been read; d values.
-        unsafe { mode.write(&v[..d]) };
-        Ok(())
+        unsafe { get_into(args!(mode: out [d]), |v| filter.inner.mode_into(v)) }
     })
 }
 
@@ -665,12 +656,11 @@ pub unsafe extern "C" fn bingham_filter_angular_spread(
         let filter = unsafe { handle("f", f)? };
         let d = filter.inner.dim();
         // SAFETY: caller contract; d writable doubles.
-        let (spread,) = unsafe { args!(spread: out [d]).read()? };
-        let mut out = [0.0; 4];
-        filter.inner.angular_spread_into(&mut out[..d])?;
-        // SAFETY: every input has been read; d values.
-        unsafe { spread.write(&out[..d]) };
-        Ok(())
+        unsafe {
+            get_into(args!(spread: out [d]), |v| {
+                filter.inner.angular_spread_into(v)
+            })
+        }
     })
 }
 
