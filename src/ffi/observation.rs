@@ -6,9 +6,21 @@
 //! the core, copy the results out.
 
 use super::args::{args, Arg};
-use super::guard::{guard, Failure};
+use super::guard::{guard, Failure, FfiResult};
 use super::status::bingham_status;
 use crate::observation::{angular_spread, noise_from_angle_std, vector_observation};
+
+/// `d` is 2 (axes in the plane, unit complex numbers) or 4 (rotations, unit quaternions); `what`
+/// names the refused object in the message.
+fn rotation_dim(d: usize, what: &str) -> FfiResult<()> {
+    if d == 2 || d == 4 {
+        Ok(())
+    } else {
+        Err(Failure::dimension(format!(
+            "{what} exists for d = 2 and d = 4, got d = {d}"
+        )))
+    }
+}
 
 /// The likelihood of a measured direction as a Bingham distribution of the orientation (d = 4).
 ///
@@ -76,11 +88,7 @@ pub unsafe extern "C" fn bingham_noise_from_angle_std(
     z: *mut f64,
 ) -> bingham_status {
     guard("bingham_noise_from_angle_std", || {
-        if d != 2 && d != 4 {
-            return Err(Failure::dimension(format!(
-                "rotation noise exists for d = 2 and d = 4, got d = {d}"
-            )));
-        }
+        rotation_dim(d, "rotation noise")?;
         // SAFETY: caller contract.
         let (out,) = unsafe { args!((m, z): out bingham).read()? };
         let b = noise_from_angle_std(d, sigma)?;
@@ -117,11 +125,7 @@ pub unsafe extern "C" fn bingham_angular_spread(
     spread: *mut f64,
 ) -> bingham_status {
     guard("bingham_angular_spread", || {
-        if d != 2 && d != 4 {
-            return Err(Failure::dimension(format!(
-                "the angular spread exists for d = 2 and d = 4, got d = {d}"
-            )));
-        }
+        rotation_dim(d, "the angular spread")?;
         // SAFETY: caller contract.
         let (b, spread) = unsafe { args!((m, z): bingham [d], spread: out [d]).read()? };
         let s = angular_spread(&b)?;
