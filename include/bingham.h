@@ -509,28 +509,6 @@ enum bingham_status bingham_log_normalization_hessian(size_t d,
                                                       double *d2log_f);
 
 /**
- * The second moment `S = E[x xᵀ] = M diag(ω) Mᵀ` of Bingham(M, Z) (the covariance, as E[x] = 0),
- * with ω_i = ∂ log F/∂z_i; trace S = 1.
- *
- * - `d`: 2..64.
- * - `m`: d×d row-major orthogonal matrix (max |MᵀM − I| ≤ `BINGHAM_ORTHOGONALITY_TOL`), columns
- *   are the principal directions.
- * - `z`: d concentrations, column i of `m` belongs to `z[i]`; any order and shift.
- * - `s`: receives S, d×d row-major, symmetric.
- *
- * Errors: `BINGHAM_ERR_INVALID_DIMENSION`, `BINGHAM_ERR_NULL_ARGUMENT`,
- * `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, M not orthogonal), `BINGHAM_ERR_NUMERICAL`.
- * On error nothing is written.
- *
- * # Safety
- * `m`: d*d and `z`: d readable doubles; `s`: d*d writable doubles.
- */
-enum bingham_status bingham_second_moment(size_t d,
-                                          const double *m,
-                                          const double *z,
-                                          double *s);
-
-/**
  * Maximum-likelihood (moment-matching) Bingham distribution for a second-moment matrix S.
  *
  * Finds M, Z with `E[x xᵀ] = S`: M from the eigenvectors of S, Z by solving ω(Z) = eigenvalues
@@ -578,6 +556,28 @@ enum bingham_status bingham_mle_samples(size_t d,
                                         const double *w,
                                         double *m,
                                         double *z);
+
+/**
+ * The second moment `S = E[x xᵀ] = M diag(ω) Mᵀ` of Bingham(M, Z) (the covariance, as E[x] = 0),
+ * with ω_i = ∂ log F/∂z_i; trace S = 1.
+ *
+ * - `d`: 2..64.
+ * - `m`: d×d row-major orthogonal matrix (max |MᵀM − I| ≤ `BINGHAM_ORTHOGONALITY_TOL`), columns
+ *   are the principal directions.
+ * - `z`: d concentrations, column i of `m` belongs to `z[i]`; any order and shift.
+ * - `s`: receives S, d×d row-major, symmetric.
+ *
+ * Errors: `BINGHAM_ERR_INVALID_DIMENSION`, `BINGHAM_ERR_NULL_ARGUMENT`,
+ * `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, M not orthogonal), `BINGHAM_ERR_NUMERICAL`.
+ * On error nothing is written.
+ *
+ * # Safety
+ * `m`: d*d and `z`: d readable doubles; `s`: d*d writable doubles.
+ */
+enum bingham_status bingham_second_moment(size_t d,
+                                          const double *m,
+                                          const double *z,
+                                          double *s);
 
 /**
  * Product of two Bingham densities (Bayes' rule), renormalized:

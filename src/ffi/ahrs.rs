@@ -1,10 +1,8 @@
 //! The AHRS behind the opaque handle `bingham_ahrs` (the C side of [`crate::ahrs::Ahrs`]).
 //! Thin wrappers: check pointers, read the samples, call the core, copy results out.
 
-use super::guard::{
-    free_handle, guard, handle, handle_mut, need, optional, output, read, read_raw, write,
-    write_handle, Failure, FfiResult,
-};
+use super::args::{args, get_into, Arg, Fill};
+use super::guard::{free_handle, guard, handle, handle_mut, FfiResult};
 use super::status::bingham_status;
 use crate::ahrs::{Ahrs, AhrsParams};
 
@@ -50,11 +48,12 @@ pub unsafe extern "C" fn bingham_ahrs_params_default(
     p: *mut AhrsParams,
 ) -> bingham_status {
     guard("bingham_ahrs_params_default", || {
-        need("p", p)?;
+        // SAFETY: caller contract.
+        let (p,) = unsafe { args!(p: out).read()? };
         let params = AhrsParams::new(sample_time);
         params.validate()?;
-        // SAFETY: checked non-NULL and aligned.
-        unsafe { *p = params };
+        // SAFETY: checked place.
+        unsafe { p.set(params) };
         Ok(())
     })
 }
@@ -76,10 +75,11 @@ pub unsafe extern "C" fn bingham_ahrs_new(
     guard("bingham_ahrs_new", || {
         // SAFETY: caller contract.
         let params = unsafe { handle("p", p)? };
-        need("out", out)?;
+        // SAFETY: caller contract.
+        let (out,) = unsafe { args!(out: out).read()? };
         let inner = Ahrs::new(params)?;
-        // SAFETY: `out` checked non-NULL and aligned.
-        unsafe { write_handle(out, bingham_ahrs { inner }) };
+        // SAFETY: checked place, written last.
+        unsafe { out.set_handle(bingham_ahrs { inner }) };
         Ok(())
     })
 }
@@ -111,12 +111,13 @@ pub unsafe extern "C" fn bingham_ahrs_clone(
     guard("bingham_ahrs_clone", || {
         // SAFETY: caller contract.
         let ahrs = unsafe { handle("a", a)? };
-        need("out", out)?;
+        // SAFETY: caller contract.
+        let (out,) = unsafe { args!(out: out).read()? };
         let copy = bingham_ahrs {
             inner: ahrs.inner.clone(),
         };
-        // SAFETY: `out` checked non-NULL and aligned.
-        unsafe { write_handle(out, copy) };
+        // SAFETY: checked place.
+        unsafe { out.set_handle(copy) };
         Ok(())
     })
 }
@@ -146,17 +147,9 @@ pub unsafe extern "C" fn bingham_ahrs_update(
     guard("bingham_ahrs_update", || {
         // SAFETY: caller contract.
         let ahrs = unsafe { handle_mut("a", a)? };
-        need("gyr", gyr)?;
-        need("acc", acc)?;
-        let has_mag = optional("mag", mag)?;
         // SAFETY: caller contract; 3 doubles each.
-        let (g, ac) = unsafe { (read("gyr", gyr, 3)?, read("acc", acc, 3)?) };
-        let m = if has_mag {
-            // SAFETY: caller contract.
-            Some(vec3(unsafe { read("mag", mag, 3)? }))
-        } else {
-            None
-        };
+        let (g, ac, m) = unsafe { args!(gyr: [3], acc: [3], mag: opt [3]).read()? };
+        let m = m.map(vec3);
         ahrs.inner.update(&vec3(g), &vec3(ac), m.as_ref())?;
         Ok(())
     })
@@ -228,67 +221,43 @@ unsafe fn batch(
     mag: *const f64,
     quat: *mut f64,
     spread: *mut f64,
-) -> Result<(), Failure> {
+) -> FfiResult<()> {
     // SAFETY: caller contract.
     let ahrs = unsafe { handle_mut("a", a)? };
-    need("gyr", gyr)?;
-    need("acc", acc)?;
-    need("quat", quat)?;
-    let has_mag = optional("mag", mag)?;
-    let has_spread = optional("spread", spread)?;
-    super::guard::len2("gyr", n, 3)?;
-    super::guard::len2("quat", n, 4)?;
     // SAFETY: caller contract: n rows of 3 readable and of 4 (and n) writable doubles, not
-    // overlapping; `[f64; K]` has the alignment of `f64` (checked by `need`) and no padding.
-    let (g, ac, m, q, s) = unsafe {
-        (
-            rows::<3>("gyr", gyr, n)?,
-            rows::<3>("acc", acc, n)?,
-            if has_mag {
-                Some(rows::<3>("mag", mag, n)?)
-            } else {
-                None
-            },
-            rows_mut::<4>("quat", quat, n)?,
-            if has_spread {
-                Some(output("spread", spread, n)?)
-            } else {
-                None
-            },
+    // overlapping.
+    let (g, ac, q, m, s) = unsafe {
+        args!(
+            gyr: rows [n; 3],
+            acc: rows [n; 3],
+            quat: mut rows [n; 4],
+            mag: opt rows [n; 3],
+            spread: opt mut [n]
         )
+        .read()?
     };
     ahrs.inner.update_batch(g, ac, m, q, s)?;
     Ok(())
 }
 
-/// `n` rows of `K` doubles at `p` (values not checked: bad samples are refused one at a time).
+/// Shared body of the getters: borrows the AHRS, checks the outputs `outs`, lets `get` compute
+/// their values (one after another, in the order of `outs`) and only then writes them.
 ///
 /// # Safety
-/// As `read_raw` with `n * K` doubles.
-unsafe fn rows<'a, const K: usize>(
-    name: &str,
-    p: *const f64,
-    n: usize,
-) -> FfiResult<&'a [[f64; K]]> {
-    // SAFETY: forwarded contract; the length check happened in `read_raw`.
-    let flat = unsafe { read_raw(name, p, n * K)? };
-    // SAFETY: `[f64; K]` has the size of K doubles and the alignment of one.
-    Ok(unsafe { std::slice::from_raw_parts(flat.as_ptr().cast::<[f64; K]>(), n) })
-}
-
-/// `n` writable rows of `K` doubles at `p`.
-///
-/// # Safety
-/// As `output` with `n * K` doubles.
-unsafe fn rows_mut<'a, const K: usize>(
-    name: &str,
-    p: *mut f64,
-    n: usize,
-) -> FfiResult<&'a mut [[f64; K]]> {
+/// `a`: NULL or a live handle; the caller's contract for `outs`.
+unsafe fn getter<O>(
+    a: *const bingham_ahrs,
+    outs: O,
+    get: impl FnOnce(&Ahrs, &mut [f64]) -> crate::error::Result<()>,
+) -> FfiResult<()>
+where
+    O: Arg,
+    O::Value: Fill,
+{
+    // SAFETY: caller contract.
+    let ahrs = unsafe { handle("a", a)? };
     // SAFETY: forwarded contract.
-    let flat = unsafe { output(name, p, n * K)? };
-    // SAFETY: as in `rows`.
-    Ok(unsafe { std::slice::from_raw_parts_mut(flat.as_mut_ptr().cast::<[f64; K]>(), n) })
+    unsafe { get_into(outs, |v| get(&ahrs.inner, v)) }
 }
 
 /// The current orientation estimate (the mode of the Bingham state): sensor → world (ENU),
@@ -304,12 +273,13 @@ pub unsafe extern "C" fn bingham_ahrs_quaternion(
     q: *mut f64,
 ) -> bingham_status {
     guard("bingham_ahrs_quaternion", || {
-        // SAFETY: caller contract.
-        let ahrs = unsafe { handle("a", a)? };
-        need("q", q)?;
-        // SAFETY: checked pointer; 4 doubles.
-        unsafe { write(q, &ahrs.inner.quaternion()) };
-        Ok(())
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            getter(a, args!(q: out [4]), |ahrs, v| {
+                v.copy_from_slice(&ahrs.quaternion());
+                Ok(())
+            })
+        }
     })
 }
 
@@ -327,18 +297,13 @@ pub unsafe extern "C" fn bingham_ahrs_state(
     z: *mut f64,
 ) -> bingham_status {
     guard("bingham_ahrs_state", || {
-        // SAFETY: caller contract.
-        let ahrs = unsafe { handle("a", a)? };
-        need("m", m)?;
-        need("z", z)?;
-        let (mut mm, mut zz) = ([0.0; 16], [0.0; 4]);
-        ahrs.inner.state_into(&mut mm, &mut zz)?;
-        // SAFETY: checked pointers; 16 and 4 doubles.
+        // SAFETY: forwarded caller contract.
         unsafe {
-            write(m, &mm);
-            write(z, &zz);
+            getter(a, args!(m: out [16], z: out [4]), |ahrs, v| {
+                let (m, z) = v.split_at_mut(16);
+                ahrs.state_into(m, z)
+            })
         }
-        Ok(())
     })
 }
 
@@ -366,10 +331,8 @@ pub unsafe extern "C" fn bingham_ahrs_set_state(
     guard("bingham_ahrs_set_state", || {
         // SAFETY: caller contract.
         let ahrs = unsafe { handle_mut("a", a)? };
-        need("m", m)?;
-        need("z", z)?;
         // SAFETY: caller contract; 16 and 4 doubles.
-        let (ms, zs) = unsafe { (read("m", m, 16)?, read("z", z, 4)?) };
+        let (ms, zs) = unsafe { args!(m: [16], z: [4]).read()? };
         ahrs.inner.set_state(ms, zs)?;
         Ok(())
     })
@@ -392,14 +355,12 @@ pub unsafe extern "C" fn bingham_ahrs_angular_spread(
     spread: *mut f64,
 ) -> bingham_status {
     guard("bingham_ahrs_angular_spread", || {
-        // SAFETY: caller contract.
-        let ahrs = unsafe { handle("a", a)? };
-        need("spread", spread)?;
-        let mut out = [0.0; 4];
-        ahrs.inner.angular_spread(&mut out)?;
-        // SAFETY: checked pointer; 4 doubles.
-        unsafe { write(spread, &out) };
-        Ok(())
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            getter(a, args!(spread: out [4]), |ahrs, v| {
+                ahrs.angular_spread(v.try_into().expect("4 values"))
+            })
+        }
     })
 }
 
@@ -415,11 +376,12 @@ pub unsafe extern "C" fn bingham_ahrs_gyro_bias(
     bias: *mut f64,
 ) -> bingham_status {
     guard("bingham_ahrs_gyro_bias", || {
-        // SAFETY: caller contract.
-        let ahrs = unsafe { handle("a", a)? };
-        need("bias", bias)?;
-        // SAFETY: checked pointer; 3 doubles.
-        unsafe { write(bias, &ahrs.inner.gyro_bias()) };
-        Ok(())
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            getter(a, args!(bias: out [3]), |ahrs, v| {
+                v.copy_from_slice(&ahrs.gyro_bias());
+                Ok(())
+            })
+        }
     })
 }

@@ -5,10 +5,10 @@
 
 use std::os::raw::c_int;
 
-use super::guard::{dim, guard, need, optional, read, write, Failure, FfiResult};
+use super::args::{args, Arg};
+use super::guard::{dim, guard, Failure, FfiResult};
 use super::status::bingham_status;
 use crate::deterministic::{max_count, Reproduced, Scheme};
-use crate::distribution::Bingham;
 
 /// Scheme of `bingham_deterministic_samples()`: the TAC 2016 points (Gilitschenski, Kurz,
 /// Julier & Hanebeck, "Unscented Orientation Estimation Based on the Bingham Distribution",
@@ -69,9 +69,10 @@ pub unsafe extern "C" fn bingham_deterministic_sample_count(
     guard("bingham_deterministic_sample_count", || {
         dim(d)?;
         let s = scheme_of(scheme, 0.5)?;
-        need("count", count)?;
-        // SAFETY: checked non-NULL and aligned; one writable size_t (caller contract).
-        unsafe { *count = max_count(d, s) };
+        // SAFETY: caller contract; one writable size_t.
+        let (count,) = unsafe { args!(count: out).read()? };
+        // SAFETY: checked place.
+        unsafe { count.set(max_count(d, s)) };
         Ok(())
     })
 }
@@ -135,12 +136,15 @@ pub unsafe extern "C" fn bingham_deterministic_samples(
     guard("bingham_deterministic_samples", || {
         dim(d)?;
         let s = scheme_of(scheme, lambda)?;
-        need("m", m)?;
-        need("z", z)?;
-        need("points", points)?;
-        need("weights", weights)?;
-        need("count", count)?;
-        let want_reproduced = optional("reproduced", reproduced)?;
+        let list = args!(
+            (m, z): bingham [d],
+            points: out [capacity.saturating_mul(d)],
+            weights: out [capacity],
+            count: out,
+            reproduced: opt out,
+        );
+        list.check()?;
+        // the capacity: after the pointers, before anything is read
         let needed = max_count(d, s);
         if capacity < needed {
             return Err(Failure::dimension(format!(
@@ -149,10 +153,9 @@ pub unsafe extern "C" fn bingham_deterministic_samples(
                 scheme_name(scheme)
             )));
         }
-        // SAFETY: caller contract; lengths d*d and d (d <= 64).
-        let (ms, zs) = unsafe { (read("m", m, d * d)?, read("z", z, d)?) };
-        let b = Bingham::from_row_major(d, ms, zs)
-            .map_err(|e| Failure::from(e).context("(`m`, `z`)"))?;
+        // SAFETY: checked above; caller contract: lengths d*d and d (d <= 64), capacity*d and
+        // capacity writable doubles, a writable size_t and int.
+        let (b, points, weights, count, reproduced) = unsafe { list.take()? };
         let samples = b.deterministic_samples(s)?;
         let n = samples.count();
         debug_assert!(n <= capacity && samples.points.len() == n * d);
@@ -160,14 +163,13 @@ pub unsafe extern "C" fn bingham_deterministic_samples(
             Reproduced::SecondMoment => 2,
             Reproduced::FourthMoments => 4,
         };
-        // SAFETY: pointers checked; n*d <= capacity*d and n <= capacity doubles are writable
-        // (caller contract), `count` and `reproduced` (if present) one element each.
+        // SAFETY: every input has been read; n*d <= capacity*d and n <= capacity values.
         unsafe {
-            write(points, &samples.points);
-            write(weights, &samples.weights);
-            *count = n;
-            if want_reproduced {
-                *reproduced = code;
+            points.write(&samples.points);
+            weights.write(&samples.weights);
+            count.set(n);
+            if let Some(reproduced) = reproduced {
+                reproduced.set(code);
             }
         }
         Ok(())
@@ -177,6 +179,7 @@ pub unsafe extern "C" fn bingham_deterministic_samples(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::distribution::Bingham;
     use bingham_status::*;
 
     #[test]

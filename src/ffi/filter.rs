@@ -5,9 +5,8 @@
 
 use std::os::raw::{c_int, c_void};
 
-use super::guard::{
-    free_handle, guard, handle, handle_mut, need, read, write, write1, write_handle, Failure,
-};
+use super::args::{args, get_into, Arg, ArrayIn, Store};
+use super::guard::{free_handle, guard, handle, handle_mut, Failure, FfiResult};
 use super::status::bingham_status;
 use crate::filter::BinghamFilter;
 
@@ -69,14 +68,11 @@ pub unsafe extern "C" fn bingham_filter_new(
                 "the filter exists for d = 2 (axes) and d = 4 (quaternions), got d = {d}"
             )));
         }
-        need("m0", m0)?;
-        need("z0", z0)?;
-        need("out", out)?;
         // SAFETY: caller contract; lengths d*d and d.
-        let (ms, zs) = unsafe { (read("m0", m0, d * d)?, read("z0", z0, d)?) };
+        let (ms, zs, out) = unsafe { args!(m0: [d * d], z0: [d], out: out).read()? };
         let inner = BinghamFilter::new(d, ms, zs)?;
-        // SAFETY: `out` checked non-NULL and aligned; written last.
-        unsafe { write_handle(out, bingham_filter { inner }) };
+        // SAFETY: every input has been read; written last.
+        unsafe { out.set_handle(bingham_filter { inner }) };
         Ok(())
     })
 }
@@ -114,12 +110,13 @@ pub unsafe extern "C" fn bingham_filter_clone(
     guard("bingham_filter_clone", || {
         // SAFETY: caller contract.
         let filter = unsafe { handle("f", f)? };
-        need("out", out)?;
+        // SAFETY: caller contract.
+        let (out,) = unsafe { args!(out: out).read()? };
         let copy = bingham_filter {
             inner: filter.inner.clone(),
         };
-        // SAFETY: `out` checked non-NULL and aligned.
-        unsafe { write_handle(out, copy) };
+        // SAFETY: checked place.
+        unsafe { out.set_handle(copy) };
         Ok(())
     })
 }
@@ -138,9 +135,10 @@ pub unsafe extern "C" fn bingham_filter_dim(
     guard("bingham_filter_dim", || {
         // SAFETY: caller contract.
         let filter = unsafe { handle("f", f)? };
-        need("d", d)?;
-        // SAFETY: checked non-NULL and aligned; one writable size_t.
-        unsafe { *d = filter.inner.dim() };
+        // SAFETY: caller contract; one writable size_t.
+        let (d,) = unsafe { args!(d: out).read()? };
+        // SAFETY: checked place.
+        unsafe { d.set(filter.inner.dim()) };
         Ok(())
     })
 }
@@ -165,10 +163,8 @@ pub unsafe extern "C" fn bingham_filter_set_state(
         // SAFETY: caller contract.
         let filter = unsafe { handle_mut("f", f)? };
         let d = filter.inner.dim();
-        need("m", m)?;
-        need("z", z)?;
         // SAFETY: caller contract; lengths d*d and d.
-        let (ms, zs) = unsafe { (read("m", m, d * d)?, read("z", z, d)?) };
+        let (ms, zs) = unsafe { args!(m: [d * d], z: [d]).read()? };
         filter.inner.set_state(ms, zs)?;
         Ok(())
     })
@@ -193,18 +189,14 @@ pub unsafe extern "C" fn bingham_filter_get_state(
     guard("bingham_filter_get_state", || {
         // SAFETY: caller contract.
         let filter = unsafe { handle("f", f)? };
-        need("m", m)?;
-        need("z", z)?;
-        let mut mb = [0.0; 16];
-        let mut zb = [0.0; 4];
         let d = filter.inner.dim();
-        filter.inner.state_into(&mut mb[..d * d], &mut zb[..d])?;
-        // SAFETY: checked pointers; d*d and d writable doubles.
+        // SAFETY: caller contract; d*d and d writable doubles.
         unsafe {
-            write(m, &mb[..d * d]);
-            write(z, &zb[..d]);
+            get_into(args!(m: out [d * d], z: out [d]), |v| {
+                let (m, z) = v.split_at_mut(d * d);
+                filter.inner.state_into(m, z)
+            })
         }
-        Ok(())
     })
 }
 
@@ -224,14 +216,37 @@ pub unsafe extern "C" fn bingham_filter_mode(
     guard("bingham_filter_mode", || {
         // SAFETY: caller contract.
         let filter = unsafe { handle("f", f)? };
-        need("mode", mode)?;
-        let mut v = [0.0; 4];
         let d = filter.inner.dim();
-        filter.inner.mode_into(&mut v[..d])?;
-        // SAFETY: checked pointer; d writable doubles.
-        unsafe { write(mode, &v[..d]) };
-        Ok(())
+        // SAFETY: caller contract; d writable doubles.
+        unsafe { get_into(args!(mode: out [d]), |v| filter.inner.mode_into(v)) }
     })
+}
+
+/// Shared body of the steps that read a noise `(m_*, z_*)` (d×d row-major and d doubles):
+/// `bingham_filter_predict`, `_predict_rotation`, `_predict_nonlinear`, `_update` and
+/// `_log_likelihood`. Checks the pointers of `before` (the arguments before the noise: the
+/// rotation or the measurement), of the noise and of `after` (the output, if any), in this
+/// order, then reads them in the same order, runs `step` and stores its result in `after`.
+///
+/// # Safety
+/// The caller's contract for the arguments (the noise: d*d and d readable doubles).
+unsafe fn noise_step<B: Arg, A: Arg, R>(
+    d: usize,
+    before: B,
+    [(m_name, m), (z_name, z)]: [(&'static str, *const f64); 2],
+    after: A,
+    step: impl FnOnce(B::Value, &[f64], &[f64]) -> crate::error::Result<R>,
+) -> FfiResult<()>
+where
+    A::Value: Store<R>,
+{
+    let noise = (ArrayIn::new(m_name, m, d * d), ArrayIn::new(z_name, z, d));
+    // SAFETY: forwarded contract.
+    let (before, (ms, zs), after) = unsafe { (before, noise, after).read()? };
+    let value = step(before, ms, zs)?;
+    // SAFETY: every input has been read.
+    unsafe { after.store(value) };
+    Ok(())
 }
 
 /// Prediction step: the state becomes the distribution of `x (+) w`, `w ~ Bingham(m_w, z_w)`
@@ -260,13 +275,13 @@ pub unsafe extern "C" fn bingham_filter_predict(
     guard("bingham_filter_predict", || {
         // SAFETY: caller contract.
         let filter = unsafe { handle_mut("f", f)? };
-        let d = filter.inner.dim();
-        need("m_w", m_w)?;
-        need("z_w", z_w)?;
-        // SAFETY: caller contract; lengths d*d and d.
-        let (ms, zs) = unsafe { (read("m_w", m_w, d * d)?, read("z_w", z_w, d)?) };
-        filter.inner.predict(ms, zs)?;
-        Ok(())
+        let noise = [("m_w", m_w), ("z_w", z_w)];
+        // SAFETY: caller contract.
+        unsafe {
+            noise_step(filter.inner.dim(), (), noise, (), |(), m, z| {
+                filter.inner.predict(m, z)
+            })
+        }
     })
 }
 
@@ -295,19 +310,13 @@ pub unsafe extern "C" fn bingham_filter_predict_rotation(
         // SAFETY: caller contract.
         let filter = unsafe { handle_mut("f", f)? };
         let d = filter.inner.dim();
-        need("u", u)?;
-        need("m_w", m_w)?;
-        need("z_w", z_w)?;
-        // SAFETY: caller contract; lengths d, d*d and d.
-        let (us, ms, zs) = unsafe {
-            (
-                read("u", u, d)?,
-                read("m_w", m_w, d * d)?,
-                read("z_w", z_w, d)?,
-            )
-        };
-        filter.inner.predict_rotation(us, ms, zs)?;
-        Ok(())
+        let noise = [("m_w", m_w), ("z_w", z_w)];
+        // SAFETY: caller contract.
+        unsafe {
+            noise_step(d, args!(u: [d]), noise, (), |(u,), m, z| {
+                filter.inner.predict_rotation(u, m, z)
+            })
+        }
     })
 }
 
@@ -339,19 +348,13 @@ pub unsafe extern "C" fn bingham_filter_update(
         // SAFETY: caller contract.
         let filter = unsafe { handle_mut("f", f)? };
         let d = filter.inner.dim();
-        need("measurement", measurement)?;
-        need("m_v", m_v)?;
-        need("z_v", z_v)?;
-        // SAFETY: caller contract; lengths d, d*d and d.
-        let (ys, ms, zs) = unsafe {
-            (
-                read("measurement", measurement, d)?,
-                read("m_v", m_v, d * d)?,
-                read("z_v", z_v, d)?,
-            )
-        };
-        filter.inner.update(ys, ms, zs)?;
-        Ok(())
+        let noise = [("m_v", m_v), ("z_v", z_v)];
+        // SAFETY: caller contract.
+        unsafe {
+            noise_step(d, args!(measurement: [d]), noise, (), |(y,), m, z| {
+                filter.inner.update(y, m, z)
+            })
+        }
     })
 }
 
@@ -385,22 +388,17 @@ pub unsafe extern "C" fn bingham_filter_log_likelihood(
         // SAFETY: caller contract.
         let filter = unsafe { handle("f", f)? };
         let d = filter.inner.dim();
-        need("measurement", measurement)?;
-        need("m_v", m_v)?;
-        need("z_v", z_v)?;
-        need("out", out)?;
-        // SAFETY: caller contract; lengths d, d*d and d.
-        let (ys, ms, zs) = unsafe {
-            (
-                read("measurement", measurement, d)?,
-                read("m_v", m_v, d * d)?,
-                read("z_v", z_v, d)?,
+        let noise = [("m_v", m_v), ("z_v", z_v)];
+        // SAFETY: caller contract.
+        unsafe {
+            noise_step(
+                d,
+                args!(measurement: [d]),
+                noise,
+                args!(out: out),
+                |(y,), m, z| filter.inner.log_likelihood(y, m, z),
             )
-        };
-        let value = filter.inner.log_likelihood(ys, ms, zs)?;
-        // SAFETY: checked pointer.
-        unsafe { write1(out, value) };
-        Ok(())
+        }
     })
 }
 
@@ -429,10 +427,8 @@ pub unsafe extern "C" fn bingham_filter_update_vector(
     guard("bingham_filter_update_vector", || {
         // SAFETY: caller contract.
         let filter = unsafe { handle_mut("f", f)? };
-        need("body", body)?;
-        need("reference", reference)?;
         // SAFETY: caller contract; 3 doubles each.
-        let (b, r) = unsafe { (read("body", body, 3)?, read("reference", reference, 3)?) };
+        let (b, r) = unsafe { args!(body: [3], reference: [3]).read()? };
         filter.inner.update_vector(b, r, kappa)?;
         Ok(())
     })
@@ -463,14 +459,11 @@ pub unsafe extern "C" fn bingham_filter_log_likelihood_vector(
     guard("bingham_filter_log_likelihood_vector", || {
         // SAFETY: caller contract.
         let filter = unsafe { handle("f", f)? };
-        need("body", body)?;
-        need("reference", reference)?;
-        need("out", out)?;
-        // SAFETY: caller contract; 3 doubles each.
-        let (b, r) = unsafe { (read("body", body, 3)?, read("reference", reference, 3)?) };
+        // SAFETY: caller contract; 3 doubles each, one writable double.
+        let (b, r, out) = unsafe { args!(body: [3], reference: [3], out: out).read()? };
         let value = filter.inner.log_likelihood_vector(b, r, kappa)?;
-        // SAFETY: checked pointer.
-        unsafe { write1(out, value) };
+        // SAFETY: every input has been read.
+        unsafe { out.set(value) };
         Ok(())
     })
 }
@@ -563,12 +556,7 @@ pub unsafe extern "C" fn bingham_filter_predict_nonlinear(
     guard("bingham_filter_predict_nonlinear", || {
         // SAFETY: caller contract.
         let filter = unsafe { handle_mut("f", f)? };
-        let d = filter.inner.dim();
         let callback = r#fn.ok_or_else(|| Failure::null("fn"))?;
-        need("m_w", m_w)?;
-        need("z_w", z_w)?;
-        // SAFETY: caller contract; lengths d*d and d.
-        let (ms, zs) = unsafe { (read("m_w", m_w, d * d)?, read("z_w", z_w, d)?) };
         let transition = |x: &[f64], out: &mut [f64]| -> Result<(), String> {
             out.fill(f64::NAN);
             // SAFETY: `x` and `out` are library-owned arrays of d doubles, valid for the call;
@@ -580,8 +568,13 @@ pub unsafe extern "C" fn bingham_filter_predict_nonlinear(
                 Ok(())
             }
         };
-        filter.inner.predict_nonlinear(transition, ms, zs)?;
-        Ok(())
+        let noise = [("m_w", m_w), ("z_w", z_w)];
+        // SAFETY: caller contract.
+        unsafe {
+            noise_step(filter.inner.dim(), (), noise, (), |(), m, z| {
+                filter.inner.predict_nonlinear(transition, m, z)
+            })
+        }
     })
 }
 
@@ -661,13 +654,13 @@ pub unsafe extern "C" fn bingham_filter_angular_spread(
     guard("bingham_filter_angular_spread", || {
         // SAFETY: caller contract.
         let filter = unsafe { handle("f", f)? };
-        need("spread", spread)?;
-        let mut out = [0.0; 4];
         let d = filter.inner.dim();
-        filter.inner.angular_spread_into(&mut out[..d])?;
-        // SAFETY: checked pointer; length d.
-        unsafe { write(spread, &out[..d]) };
-        Ok(())
+        // SAFETY: caller contract; d writable doubles.
+        unsafe {
+            get_into(args!(spread: out [d]), |v| {
+                filter.inner.angular_spread_into(v)
+            })
+        }
     })
 }
 

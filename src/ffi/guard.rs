@@ -127,15 +127,6 @@ pub(crate) fn need<T>(name: &str, p: *const T) -> FfiResult<()> {
     }
 }
 
-/// An optional pointer: NULL or aligned. Returns whether it is present.
-pub(crate) fn optional<T>(name: &str, p: *const T) -> FfiResult<bool> {
-    if p.is_null() {
-        Ok(false)
-    } else {
-        need(name, p).map(|()| true)
-    }
-}
-
 /// Borrows the caller's input array `p[0..len]` after checking the pointer and that every entry
 /// is finite. `len == 0` accepts a NULL pointer and gives an empty slice.
 ///
@@ -200,15 +191,6 @@ pub(crate) unsafe fn write(p: *mut f64, src: &[f64]) {
     // SAFETY: the caller guarantees `src.len()` writable doubles at `p`; `src` is library-owned
     // memory, so the two ranges do not overlap.
     unsafe { std::ptr::copy_nonoverlapping(src.as_ptr(), p, src.len()) }
-}
-
-/// Writes one `double` result.
-///
-/// # Safety
-/// As for [`write`], with one element.
-pub(crate) unsafe fn write1(p: *mut f64, value: f64) {
-    // SAFETY: forwarded contract.
-    unsafe { write(p, std::slice::from_ref(&value)) }
 }
 
 // ---- opaque handles (`bingham_filter *` and future ones) ---------------------------------------
@@ -463,8 +445,6 @@ mod tests {
             need("p", misaligned).unwrap_err().status,
             BINGHAM_ERR_NULL_ARGUMENT
         );
-        assert!(!optional::<f64>("p", std::ptr::null()).unwrap());
-        assert!(optional("p", v.as_ptr()).unwrap());
         // SAFETY: v has 2 readable doubles; len 0 never reads.
         unsafe {
             assert_eq!(read("v", v.as_ptr(), 2).unwrap(), &v);

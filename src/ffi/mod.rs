@@ -5,7 +5,14 @@
 //! - [`status`]: `bingham_status` and `bingham_status_str`.
 //! - [`guard`]: the panic guard every export runs in, pointer/length checks, copying in and out,
 //!   and the thread-local last error message (`bingham_last_error_message`).
-//! - [`math`]: the distribution functions (`bingham_normalization_constant`, `bingham_mle`, …).
+//! - `args` (crate-internal): the argument lists of the exports (`args!`): every pointer
+//!   checked before any array is read, outputs written only after success.
+//! - [`normalization`]: the normalization constant (`bingham_normalization_constant`, …).
+//! - [`mle`]: maximum-likelihood fits (`bingham_mle`, `bingham_mle_samples`).
+//! - [`distribution`]: the functions of a distribution (`bingham_second_moment`,
+//!   `bingham_multiply`, `bingham_pdf`, `bingham_sample`, `bingham_mode`, …).
+//! - [`observation`]: observations, noise and spread of orientations
+//!   (`bingham_vector_observation`, `bingham_noise_from_angle_std`, `bingham_angular_spread`).
 //! - [`deterministic`]: deterministic samples of a distribution (`bingham_deterministic_samples`).
 //! - [`filter`]: the recursive filter handle `bingham_filter` (including the nonlinear predict
 //!   and update through C callbacks).
@@ -15,6 +22,11 @@
 //! shift on input, sorted ascending with `z[d-1] = 0` on output, quaternions scalar first, F
 //! with respect to the surface measure. Every function returns a `bingham_status` and writes its
 //! outputs only on success.
+//!
+//! Pattern of every function: check `d` (before reading any array), check the required
+//! pointers, read and validate the inputs, compute into library-owned buffers, and only then copy
+//! into the caller's outputs. So on any error no output is touched, and outputs may overlap
+//! inputs (in-place use, e.g. `bingham_multiply(d, m, z, m2, z2, m, z)`).
 //!
 //! The header is generated from this module by cbindgen (`cbindgen.toml`); the declarations
 //! appear in the order of the modules below. `tests/header.rs` fails when the committed header
@@ -27,7 +39,15 @@ pub mod status;
 
 pub mod guard;
 
-pub mod math;
+pub(crate) mod args;
+
+pub mod normalization;
+
+pub mod mle;
+
+pub mod distribution;
+
+pub mod observation;
 
 pub mod deterministic;
 
@@ -37,8 +57,11 @@ pub mod ahrs;
 
 pub use ahrs::*;
 pub use deterministic::*;
+pub use distribution::*;
 pub use filter::*;
 pub use guard::bingham_last_error_message;
-pub use math::*;
+pub use mle::*;
+pub use normalization::*;
+pub use observation::*;
 pub use status::{bingham_status, bingham_status_str};
 pub use version::*;
