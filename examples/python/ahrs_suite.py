@@ -214,9 +214,10 @@ def evaluate(name, desc, overrides, settle, filters, seed, quick):
     truth_q, truth_b = sim["truth"]["quat"], sim["truth"]["bias"]
     n = len(truth_q)
     start = int(np.searchsorted(sim["t"], settle - 1e-9))
-    res = {"description": desc, "group": group_of(name), "fs": sim["fs"], "duration": cfg.duration, "samples": n,
-           "settle_s": settle, "samples_evaluated": n - start, "seed": seed,
-           "overrides": dict(overrides), "config": dataclasses.asdict(cfg), "true_bias_rad_s": truth_b.tolist(),
+    res = {"description": desc, "group": group_of(name), "fs": sim["fs"],
+           "duration": cfg.duration, "samples": n, "settle_s": settle,
+           "samples_evaluated": n - start, "seed": seed, "overrides": dict(overrides),
+           "config": dataclasses.asdict(cfg), "true_bias_rad_s": truth_b.tolist(),
            "simulation_s": sim_seconds, "filters": {}, "errors": {}}
     segs = None
     for f in filters:

@@ -186,7 +186,8 @@ def quat_to_matrix(q):
 
 def qrotate_inv(q, v):
     """R(q)ᵀ·v: a world vector v (…×3 or 3) in the body frame of q (…×4)."""
-    return np.einsum("...ji,...j->...i", quat_to_matrix(q), np.broadcast_to(v, np.shape(q)[:-1] + (3,)))
+    v = np.broadcast_to(v, np.shape(q)[:-1] + (3,))
+    return np.einsum("...ji,...j->...i", quat_to_matrix(q), v)
 
 
 def slerp(qa, qb, u):

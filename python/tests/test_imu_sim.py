@@ -33,7 +33,8 @@ B = qexp([0.7, 0.2, 0.0])
 
 def precession_q(t):
     t = np.asarray(t, dtype=float)[..., None]
-    return qmul(qmul(qexp(np.array([0.0, 0.0, ALPHA]) * t), B), qexp(np.array([0.0, 0.0, GAMMA]) * t))
+    z = np.array([0.0, 0.0, 1.0])
+    return qmul(qmul(qexp(z * ALPHA * t), B), qexp(z * GAMMA * t))
 
 
 def precession_omega(t):
@@ -132,7 +133,8 @@ def test_accelerometer_at_rest_is_gravity_in_the_body_frame():
     still = s["t"] < 4.0
     # R(q)ᵀ·(0, 0, g), with R built independently of the simulator's helper
     w, x, y, z = q.T
-    expect = 9.81 * np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=1)
+    expect = 9.81 * np.stack([2 * (x * z - w * y), 2 * (y * z + w * x),
+                              1 - 2 * (x * x + y * y)], axis=1)
     assert np.max(np.abs(s["acc"] - expect)) < 1e-12  # no linear acceleration by default
     assert np.allclose(np.linalg.norm(s["acc"][still], axis=1), 9.81, atol=1e-12, rtol=0)
 
