@@ -80,12 +80,16 @@ demo: build venv
 	@$(VENV_PYTHON) examples/python/nonlinear.py
 
 # Orientation accuracy on real IMU data (BROAD, CC BY 4.0): our AHRS against VQF, Madgwick and
-# Mahony (the peers need the Python packages vqf and ahrs: `make deps`); plot of trial 07.
+# Mahony (the peers need the Python packages vqf and ahrs: `make deps`); plot of trial 07. Then
+# the simulated-IMU suite (examples/python/ahrs_suite.py, known truth): the AHRS, VQF and Madgwick
+# on the same simulated samples (about 25 s), all numbers in $(TARGET_DIR)/ahrs_suite.json.
 BROAD_DIR ?= ../shared/data/broad
 
 broad: venv
 	$(VENV_PYTHON) examples/python/broad.py $(BROAD_DIR) \
 	  --plot $(TARGET_DIR)/broad_trial07.svg
+	@echo
+	$(VENV_PYTHON) examples/python/ahrs_suite.py --json $(TARGET_DIR)/ahrs_suite.json
 
 # --- tests ---------------------------------------------------------------------------------
 
