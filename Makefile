@@ -1,7 +1,8 @@
 # bingham -- build, demo, test and install.
 #
 #   make demo                    build the library, then build and run the C/C++ examples
-#   make broad                   the AHRS vs VQF/Madgwick/Mahony on the BROAD trials (BROAD_DIR)
+#   make broad                   the AHRS vs VQF/Madgwick/Mahony on the BROAD trials (BROAD_DIR), then
+#                                the simulated-IMU suite with known truth (examples/python/ahrs_suite.py)
 #   make venv                    the Python package (pip install ./python) in $(TARGET_DIR)/venv
 #   make test                    everything CI runs (installs missing tools first, see `deps`)
 #   make sanitize                C/C++ tests and examples under ASan + UBSan + LSan (in `test`)
