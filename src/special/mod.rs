@@ -6,40 +6,15 @@
 //! at once; the quadrature rules of the normalization constant evaluate the same fits at several
 //! nodes at once (the crate-internal `lanes`).
 //!
-//! # Method
-//!
-//! The coefficients are fitted from scratch by `scripts/bessel_reference.py` (mpmath, 50 digits);
-//! no third-party coefficient set is used.
-//!
-//! * `0 ≤ x < 128`: 96 pieces (width 1/4 on `[0, 8)`, then 16 pieces per octave). On a piece with
-//!   midpoint `c` each function is `f(c + t) = f(c) + t·g(t)`, `f(c)` stored as a double-double
-//!   `hi + lo` and `g` a degree-9 polynomial (Chebyshev interpolant of the divided difference),
-//!   evaluated as `hi + (lo + t·g(t))` by Estrin's scheme. `t = x − c` is exact (Sterbenz) except on
-//!   the first piece. The piece index comes from the exponent and top mantissa bits of `x` (or of
-//!   `x + 8`), so there is no `exp`, no division, no square root and no float-to-int conversion.
-//!   `e^{-x} I1(x)` and the difference `e^{-x} (I0 − I1)` are fitted directly (no cancellation) and
-//!   evaluated together (interleaved coefficients, two lanes per step); `i0e = i1e + (i0e − i1e)` is
-//!   a sum of two positive numbers. On the first piece `[0, 1/4)` the fitted function is
-//!   `e^{-x} I1(x) / x`, so `i1e(x) = x·G(x)` keeps full relative accuracy as `x → 0`.
-//!   The truncation error of every piece is about `2e-17` relative (well below half an ulp).
-//! * `x ≥ 128`: the asymptotic series `e^{-x} I_ν(x) ~ (2πx)^{-1/2} Σ_k (−1)^k a_k(ν) x^{−k}`,
-//!   `a_k(ν) = Π_{j=1..k} (4ν² − (2j−1)²) / (k! 8^k)`, with the coefficients of `I0 − I1` and of
-//!   `3I0 − 4I1 + I2` combined exactly (in rational arithmetic) before rounding: their leading terms
-//!   cancel analytically, so the differences are computed without cancellation. 9, 10 and 11 terms
-//!   keep the truncation error below `3e-18` relative at `x = 128` for `I0`, `I0 − I1` and `Q`.
-//!
-//! Accuracy, measured against the 50-digit reference `tests/data/bessel_reference.csv`
-//! (`tests/special.rs`; figures in `docs/accuracy.md`, § "Bessel functions"): within 1 ulp of the
-//! correctly rounded value on `[0, 128)`; beyond, where the roundings of `1/x` and of its square
-//! root enter, within a few ulp. Only `+`, `−` and `×` are used
-//! (plus one division and one square root for `x ≥ 128`); no `mul_add`, which is a slow library
-//! call unless FMA is enabled at compile time.
-//!
-//! Speed: `benches/special.rs` (criterion); the medians are in `docs/speed.md`.
-//!
-//! The crate-internal module `lanes` evaluates the same fits and series for several arguments at once (SIMD), for the
-//! quadrature of the normalization constant; its results equal these functions' (bit for bit
-//! without fused multiply-adds, to rounding with them).
+//! Contract: within 1 ulp of the correctly rounded value on `[0, 128)`, within a few ulp beyond
+//! (measured against the 50-digit `tests/data/bessel_reference.csv`, `tests/special.rs`; figures
+//! in `docs/accuracy.md`, § "Bessel functions"); finite for every finite argument. Method: 96
+//! double-double-anchored polynomial pieces on `[0, 128)` (coefficients fitted from scratch by
+//! `scripts/bessel_reference.py` into the generated `tables`), the asymptotic series beyond, the
+//! differences fitted directly (no cancellation); the derivation is in `docs/design.md`
+//! (§ "Bessel functions"). The crate-internal `lanes` evaluates the same fits for several
+//! arguments at once (SIMD) for the quadrature; its results equal these functions' (bit for bit
+//! without fused multiply-adds). Speed: `docs/speed.md` (`benches/special.rs`).
 
 pub(crate) mod lanes;
 mod tables;
