@@ -8,7 +8,8 @@
 #   make sanitize                C/C++ tests and examples under ASan + UBSan + LSan (in `test`)
 #   make valgrind                the same programs and the C ABI fuzz harness under valgrind
 #   make fuzz                    long reliability runs: 10^7 fuzz cases, 10^6 filter steps
-#   make install PREFIX=/opt/x   shared + static library, headers (C, C++), pkg-config file, CMake package
+#   make install PREFIX=/opt/x   shared + static library (debug info stripped; STRIP= keeps it), headers,
+#                                pkg-config file, CMake package
 #   make header                  regenerate include/bingham.h from src/ffi/ (commit the result)
 #
 # Uses cargo's default target directory (target/), or CARGO_TARGET_DIR if set.
@@ -24,6 +25,10 @@ PREFIX ?= /usr/local
 LIBDIR ?= $(PREFIX)/lib
 INCLUDEDIR ?= $(PREFIX)/include
 DESTDIR ?=
+# `make install` strips the debug info (the release build keeps line tables, `debug = 1`, for
+# profiling and backtraces): the shared library with --strip-unneeded, the static archive with
+# --strip-debug. `make install STRIP=` keeps them.
+STRIP ?= strip
 
 VERSION := $(shell sed -n 's/^version *= *"\([^"]*\)".*/\1/p' Cargo.toml | head -n 1)
 MAJOR := $(firstword $(subst ., ,$(VERSION)))
@@ -167,6 +172,8 @@ install:
 	install -m 755 $(RELEASE)/libbingham.so $(DESTDIR)$(LIBDIR)/libbingham.so.$(VERSION)
 	ln -sf libbingham.so.$(VERSION) $(DESTDIR)$(LIBDIR)/libbingham.so.$(MAJOR)
 	ln -sf libbingham.so.$(MAJOR) $(DESTDIR)$(LIBDIR)/libbingham.so
+	$(if $(STRIP),$(STRIP) --strip-unneeded $(DESTDIR)$(LIBDIR)/libbingham.so.$(VERSION))
+	$(if $(STRIP),$(STRIP) --strip-debug $(DESTDIR)$(LIBDIR)/libbingham.a)
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBDIR@|$(PC_LIBDIR)|g' \
 	    -e 's|@INCLUDEDIR@|$(PC_INCLUDEDIR)|g' -e 's|@VERSION@|$(VERSION)|g' \
 	    bingham.pc.in > $(DESTDIR)$(LIBDIR)/pkgconfig/bingham.pc

@@ -31,6 +31,15 @@ done
 [ "$(readlink "$lib/libbingham.so.$major")" = "libbingham.so.$version" ] || fail "libbingham.so.$major -> libbingham.so.$version"
 readelf -d "$lib/libbingham.so.$version" | grep -q "Library soname: \[libbingham.so.$major\]" ||
     fail "SONAME is not libbingham.so.$major"
+# installed without debug info (`make install` strips it; the build keeps it)
+if readelf -S "$lib/libbingham.so.$version" | grep -q '\.debug_info'; then
+    fail "libbingham.so has debug info"
+fi
+if readelf -S "$lib/libbingham.a" 2>/dev/null | grep -q '\.debug_info'; then
+    fail "libbingham.a has debug info"
+fi
+so_bytes=$(stat -c %s "$lib/libbingham.so.$version")
+[ "$so_bytes" -le $((2 * 1024 * 1024)) ] || fail "libbingham.so is $so_bytes bytes (more than 2 MiB)"
 
 # exported symbols: exactly the functions the header declares
 declared=$(grep -E '^[a-z].*\bbingham_[a-z0-9_]+\(' "$prefix/include/bingham.h" |
