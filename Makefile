@@ -62,7 +62,7 @@ build:
 header:
 	BINGHAM_WRITE_HEADER=1 $(CARGO) test --release --test header
 
-demo: build venv
+demo: deps build venv
 	@mkdir -p $(DEMO_DIR)
 	@set -e; for src in examples/c/*.c examples/c/*.cpp examples/cpp/*.cpp; do \
 	  [ -e "$$src" ] || continue; \
