@@ -14,10 +14,14 @@
  * - the AHRS: NaN samples refused, a first sample without gravity refused, params with
  *   sample_time 0/NaN refused, a batch stopping at a NaN in sample 5 of 10 (message "sample 5",
  *   rows 0..4 written and equal to single updates, rows 5..9 untouched), mag = NULL accepted,
- *   bingham_ahrs_free(NULL), clones evolving identically.
+ *   bingham_ahrs_free(NULL), clones evolving identically;
+ * - the latencies: default 0, out-of-range / NaN mag_latency and acc_latency refused with a
+ *   message naming the field; bingham_ahrs_mag_latency_estimate: NULLs, NOT_CONVERGED (output
+ *   untouched) before informative motion, then the delay of a noise-free simulated spin with a
+ *   changing rate and the magnetometer two samples late.
  *
  * bingham_ahrs_params is filled with bingham_ahrs_params_default() only (its fields may change);
- * only sample_time is set by hand.
+ * only sample_time and the latencies are set by hand.
  */
 #define _DEFAULT_SOURCE 1
 #include <stdint.h>
@@ -619,6 +623,89 @@ static void test_ahrs_batch(void) {
     }
 }
 
+/* ---- the latencies ---------------------------------------------------------------------------- */
+
+static void qmul(const double *a, const double *b, double *out) {
+    double r[4] = {a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+                   a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+                   a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+                   a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]};
+    memcpy(out, r, sizeof r);
+}
+
+/* R(q)^T v: a world vector in the sensor frame of q. */
+static void to_sensor(const double *q, const double *v, double *out) {
+    double c[4] = {q[0], -q[1], -q[2], -q[3]}, p[4] = {0.0, v[0], v[1], v[2]}, t[4];
+    qmul(c, p, t);
+    qmul(t, q, t);
+    out[0] = t[1], out[1] = t[2], out[2] = t[3];
+}
+
+static void test_ahrs_latency(void) {
+    const char *fn = "bingham_ahrs_mag_latency_estimate";
+    bingham_ahrs_params p, q;
+    CHECK_OK(bingham_ahrs_params_default(0.01, &p));
+    CHECK(p.mag_latency == 0.0 && p.acc_latency == 0.0); /* default: no compensation */
+    const double bad[5] = {-1e-9, BINGHAM_AHRS_MAX_LATENCY * 1.000001, 11.0, NAN, INFINITY};
+    bingham_ahrs *a = (bingham_ahrs *)no_access_page;
+    for (int k = 0; k < 5; ++k) {
+        q = p;
+        q.mag_latency = bad[k];
+        CHECK_STATUS(bingham_ahrs_new(&q, &a), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg("bingham_ahrs_new", "mag_latency");
+        q = p;
+        q.acc_latency = bad[k];
+        CHECK_STATUS(bingham_ahrs_new(&q, &a), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg("bingham_ahrs_new", "acc_latency");
+        CHECK(a == (bingham_ahrs *)no_access_page);
+    }
+    q = p;
+    q.mag_latency = 0.02, q.acc_latency = BINGHAM_AHRS_MAX_LATENCY;
+    a = NULL;
+    CHECK_OK(bingham_ahrs_new(&q, &a));
+    bingham_ahrs_free(a);
+
+    a = new_ahrs(0.01);
+    if (!a) return;
+    double l;
+    fill(&l, sizeof l);
+    CHECK_STATUS(bingham_ahrs_mag_latency_estimate(NULL, &l), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "a");
+    CHECK_STATUS(bingham_ahrs_mag_latency_estimate(a, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "latency");
+    CHECK_STATUS(bingham_ahrs_mag_latency_estimate(a, &l), BINGHAM_ERR_NOT_CONVERGED);
+    check_msg(fn, "informative motion");
+    CHECK(untouched(&l, sizeof l));
+    /* 40 s at 100 Hz: a spin of 4 +- 1.5 rad/s about a tilted axis plus a swinging rate about a
+     * perpendicular one; gyro sample k turns the truth from k-1 to k; the magnetometer shows the
+     * orientation two samples (20 ms) earlier; no noise. */
+    enum { N = 4000, DELAY = 2 };
+    static double truth[N][4];
+    double qt[4] = {1.0, 0.0, 0.0, 0.0};
+    const double axis[3] = {0.4596, 0.6128, 0.6428}, perp[3] = {0.8, -0.6, 0.0};
+    const double field[3] = {0.0, 25.0, -43.30127018922193}, up[3] = {0.0, 0.0, 9.81};
+    for (int k = 0; k < N; ++k) {
+        double t = 0.01 * k - 0.005;
+        double sa = 4.0 + 1.5 * sin(2.0 * PI * 0.4 * t), sb = 1.5 * sin(2.0 * PI * 0.9 * t + 1.0);
+        double g[3], acc[3], mag[3];
+        for (int i = 0; i < 3; ++i) g[i] = sa * axis[i] + sb * perp[i];
+        if (k > 0) {
+            double th = 0.01 * sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]), s = sin(th / 2.0) / th * 0.01;
+            double dq[4] = {cos(th / 2.0), s * g[0], s * g[1], s * g[2]};
+            qmul(qt, dq, qt);
+        }
+        memcpy(truth[k], qt, sizeof qt);
+        to_sensor(qt, up, acc);
+        to_sensor(truth[k < DELAY ? 0 : k - DELAY], field, mag);
+        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+    }
+    astate s = asnap(a);
+    CHECK_OK(bingham_ahrs_mag_latency_estimate(a, &l));
+    CHECK(fabs(l - 0.02) < 1e-4);
+    CHECK(same_state(s, asnap(a)));
+    bingham_ahrs_free(a);
+}
+
 int main(void) {
     long page = sysconf(_SC_PAGESIZE);
     no_access_page = mmap(NULL, (size_t)page, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
@@ -634,5 +721,6 @@ int main(void) {
     test_ahrs_params_and_new();
     test_ahrs_update();
     test_ahrs_batch();
+    test_ahrs_latency();
     return check_summary("ahrs_api");
 }

@@ -429,6 +429,11 @@ static void test_ahrs() {
     const auto ab = a.gyro_bias();
     CHECK(std::memcmp(asp.data(), sp, sizeof sp) == 0 && a.uncertainty() == sp[3]);
     CHECK(std::memcmp(ab.data(), bias, sizeof bias) == 0);
+    // the latency readout: none yet after 51 samples (nullopt for BINGHAM_ERR_NOT_CONVERGED)
+    double lat = -1.0;
+    CHECK(bingham_ahrs_mag_latency_estimate(c, &lat) == BINGHAM_ERR_NOT_CONVERGED && lat == -1.0);
+    CHECK(!a.mag_latency_estimate().has_value());
+    CHECK(pw.mag_latency == 0.0 && pw.acc_latency == 0.0);
 
     // a refused sample throws and leaves the AHRS unchanged
     const bingham::Distribution before = a.state();

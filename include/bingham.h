@@ -126,6 +126,16 @@
 #define BINGHAM_AHRS_MIN_STEP_NOISE 1e-6
 
 /**
+ * The largest sensor latency (s) the AHRS accepts for `mag_latency` and `acc_latency`
+ * (`BINGHAM_AHRS_MAX_LATENCY` in C). The compensation turns a sample by the current rate
+ * times the latency (a constant-rate extrapolation), which only holds over a fraction of the
+ * motion's time scale; real offsets between the channels of an IMU are milliseconds to a few
+ * tens of milliseconds. The bound also refuses a latency given in milliseconds instead of
+ * seconds.
+ */
+#define BINGHAM_AHRS_MAX_LATENCY 0.5
+
+/**
  * The result of every fallible `bingham_*` function.
  *
  * `BINGHAM_OK` (0) means success; every other value is an error, and then the function has
@@ -361,6 +371,24 @@ typedef struct bingham_ahrs_params {
      * Angular standard deviation (rad) of the initial tilt and heading.
      */
     double init_std;
+    /**
+     * Latency (s, 0 to 0.5 = `BINGHAM_AHRS_MAX_LATENCY`) of the magnetometer behind the
+     * gyroscope: magnetometer sample k shows the field of the time `t_k − mag_latency`. Each
+     * field sample is turned forward by the bias-corrected rate of its sample times the
+     * latency (in the sensor frame `m ← exp(−[ω]× mag_latency) m`: the rotation by the
+     * rotation vector `−ω·mag_latency`) before the disturbance test and the low-pass filter.
+     * Default 0: no compensation. The AHRS estimates this latency from the data as a readout
+     * (`bingham_ahrs_mag_latency_estimate()` in C, `Ahrs::mag_latency_estimate` in Rust). The
+     * time of gyroscope sample k is taken as its interval (t_{k−1}, t_k], the interval over
+     * which the prediction turns the state with it.
+     */
+    double mag_latency;
+    /**
+     * Latency (s, 0 to 0.5 = `BINGHAM_AHRS_MAX_LATENCY`) of the accelerometer behind the
+     * gyroscope, compensated as `mag_latency`: each sample is turned forward by the rate times
+     * the latency before the low-pass filter. Default 0: no compensation.
+     */
+    double acc_latency;
 } bingham_ahrs_params;
 
 #ifdef __cplusplus
@@ -1436,6 +1464,33 @@ enum bingham_status bingham_ahrs_angular_spread(const struct bingham_ahrs *a, do
  * `a`: a live handle; `bias`: 3 writable doubles.
  */
 enum bingham_status bingham_ahrs_gyro_bias(const struct bingham_ahrs *a, double *bias);
+
+/**
+ * The online estimate of the magnetometer's latency behind the gyroscope, in seconds, from the
+ * IMU alone: the lag at which the change of the field best fits the rotation the gyroscope
+ * measures (in a homogeneous field `dm/dt = -w x m` in the sensor frame). A readout: the
+ * filter does not use it; to compensate a latency, set `mag_latency` in
+ * `bingham_ahrs_params`. It estimates the latency of the raw samples, whatever `mag_latency`
+ * is. Range: 0 to 40 ms or 32 samples, whichever is smaller (at least 2 samples). Time
+ * convention: gyroscope sample k is the rate over the interval (t_{k-1}, t_k], as in the
+ * prediction (for a gyroscope that samples the rate at t_k the estimate is the latency plus
+ * half a sample, which is what the compensation needs).
+ *
+ * Available once 5 s of informative motion have been seen: seconds of samples with the
+ * magnetometer present and undisturbed, weighted by g^2/(g^2 + 1), g the change of the
+ * rotation rate across the lag window perpendicular to the field in rad/s^2 (a sensor at rest
+ * or turning at a constant rate tells the lags apart poorly and counts little). The memory is
+ * about 30 s of such motion.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `latency`), `BINGHAM_ERR_NOT_CONVERGED` (no
+ * estimate yet; the message says how much informative motion has been seen, or that the
+ * residuals do not single out a lag). On error `*latency` is not written.
+ *
+ * # Safety
+ * `a`: a live handle; `latency`: 1 writable double.
+ */
+enum bingham_status bingham_ahrs_mag_latency_estimate(const struct bingham_ahrs *a,
+                                                      double *latency);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -37,6 +37,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <exception>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -893,6 +894,17 @@ public:
         std::array<double, 3> b{};
         detail::check(bingham_ahrs_gyro_bias(a_, b.data()));
         return b;
+    }
+    /// The online estimate of the magnetometer's latency behind the gyroscope (s), or nullopt
+    /// while there is none yet (BINGHAM_ERR_NOT_CONVERGED: less than 5 s of informative motion).
+    /// A readout; set mag_latency in the parameters to compensate a latency.
+    std::optional<double> mag_latency_estimate() const {
+        require("bingham::Ahrs::mag_latency_estimate");
+        double l = 0.0;
+        const bingham_status st = bingham_ahrs_mag_latency_estimate(a_, &l);
+        if (st == BINGHAM_ERR_NOT_CONVERGED) return std::nullopt;
+        detail::check(st);
+        return l;
     }
 
 #if BINGHAM_HPP_EIGEN

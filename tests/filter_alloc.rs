@@ -92,9 +92,10 @@ fn vector_updates() {
 }
 
 /// 1000 AHRS samples (gyroscope, accelerometer, magnetometer; some with a disturbed field, some
-/// without magnetometer, a short free fall) after a few samples of warm-up.
+/// without magnetometer, a short free fall) after a few samples of warm-up, with the default
+/// parameters and with both latencies compensated; the getters (latency estimate included) too.
 fn ahrs_steps() {
-    use bingham::ahrs::{Ahrs, AhrsParams};
+    use bingham::ahrs::AhrsParams;
     use bingham::quaternion::q4;
     let dt = 0.01;
     let n = 1010;
@@ -116,7 +117,20 @@ fn ahrs_steps() {
         let gyr = [w[0] + 0.01, w[1] - 0.01, w[2] + 0.005];
         samples.push((gyr, acc, mag));
     }
-    let mut a = Ahrs::new(&AhrsParams::new(dt)).unwrap();
+    // the defaults, and the latency compensation of both sensors
+    let latencies = AhrsParams {
+        mag_latency: 0.011,
+        acc_latency: 0.005,
+        ..AhrsParams::new(dt)
+    };
+    for params in [AhrsParams::new(dt), latencies] {
+        ahrs_run(&params, &samples);
+    }
+}
+
+fn ahrs_run(params: &bingham::ahrs::AhrsParams, samples: &[([f64; 3], [f64; 3], [f64; 3])]) {
+    use bingham::ahrs::Ahrs;
+    let mut a = Ahrs::new(params).unwrap();
     for (gyr, acc, mag) in &samples[..10] {
         a.update(gyr, acc, Some(mag)).unwrap();
     }
@@ -132,7 +146,7 @@ fn ahrs_steps() {
             Some(mag)
         };
         a.update(gyr, acc, mag).unwrap();
-        sum += a.quaternion()[0] + a.gyro_bias()[0];
+        sum += a.quaternion()[0] + a.gyro_bias()[0] + a.mag_latency_estimate().unwrap_or(0.0);
         a.state_into(&mut m, &mut z).unwrap();
         a.angular_spread(&mut spread).unwrap();
     }

@@ -9,7 +9,7 @@ from typing import Dict, Optional, Tuple, Union
 import numpy as np
 
 from ._arrays import Array, ArrayLike, _in, _ptr
-from .errors import _check
+from .errors import Status, _check
 from ._library import lib
 
 __all__ = ["AhrsParams", "Ahrs"]
@@ -17,7 +17,9 @@ __all__ = ["AhrsParams", "Ahrs"]
 
 class AhrsParams(ctypes.Structure):
     """``bingham_ahrs_params`` (all angles in radians, times in seconds); build it with
-    :meth:`default`, which gives the tuned defaults."""
+    :meth:`default`, which gives the tuned defaults. ``mag_latency`` / ``acc_latency`` (s, 0 to
+    0.5, default 0): the magnetometer's / accelerometer's latency behind the gyroscope, each
+    sample turned forward by the rate over it (see :meth:`Ahrs.mag_latency_estimate`)."""
 
     _fields_ = [
         ("sample_time", ctypes.c_double),
@@ -39,6 +41,8 @@ class AhrsParams(ctypes.Structure):
         ("rest_acc", ctypes.c_double),
         ("rest_bias_time", ctypes.c_double),
         ("init_std", ctypes.c_double),
+        ("mag_latency", ctypes.c_double),
+        ("acc_latency", ctypes.c_double),
     ]
 
     @classmethod
@@ -163,3 +167,15 @@ class Ahrs:
         out = np.empty(3)
         _check(lib().bingham_ahrs_gyro_bias(self._h(), _ptr(out)))
         return out
+
+    def mag_latency_estimate(self) -> Optional[float]:
+        """The online estimate of the magnetometer's latency behind the gyroscope (seconds,
+        0 to 40 ms or 32 samples, whichever is smaller), from the IMU alone; ``None`` until
+        5 s of informative motion (a changing rotation rate with an undisturbed magnetometer)
+        have been seen. A readout: pass it as ``mag_latency`` to compensate the latency."""
+        out = np.empty(1)
+        st = lib().bingham_ahrs_mag_latency_estimate(self._h(), _ptr(out))
+        if st == Status.ERR_NOT_CONVERGED:
+            return None
+        _check(st)
+        return float(out[0])

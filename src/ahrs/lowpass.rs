@@ -33,6 +33,10 @@ pub(super) struct Coeffs {
     /// Warm-up lengths (samples) of the accelerometer's and magnetometer's low-pass filters.
     pub(super) acc_warmup: u32,
     pub(super) mag_warmup: u32,
+    /// The latencies in sample times (`acc_latency / sample_time`, `mag_latency / sample_time`):
+    /// the factor from a gyroscope increment to the compensating turn.
+    pub(super) acc_lead: f64,
+    pub(super) mag_lead: f64,
 }
 
 impl Coeffs {
@@ -47,6 +51,8 @@ impl Coeffs {
             mag: butterworth(dt, p.mag_tau),
             acc_warmup: warmup(dt, p.acc_tau),
             mag_warmup: warmup(dt, p.mag_tau),
+            acc_lead: p.acc_latency / dt,
+            mag_lead: p.mag_latency / dt,
         }
     }
 }

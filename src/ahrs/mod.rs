@@ -39,6 +39,27 @@
 //!    differs by more than `mag_dip_tol` is not used. A disturbance that stays constant for
 //!    `mag_new_time` becomes the new reference.
 //!
+//! # Latency
+//!
+//! With [`AhrsParams::mag_latency`] (or [`AhrsParams::acc_latency`]) `L > 0`, each magnetometer
+//! (accelerometer) sample is first turned forward by the bias-corrected rate of its sample over
+//! the latency, `v ← exp(−[ω]× L) v` (the rotation by the rotation vector `−ω·L`), so that it
+//! shows the field (specific force) at the end of the sample's gyroscope interval; the
+//! disturbance test and the low-pass filters see the turned samples. Default 0: the samples are
+//! used as they are.
+//!
+//! Independently, the AHRS estimates the magnetometer's latency from the raw samples
+//! ([`Ahrs::mag_latency_estimate`]): in a homogeneous field `dm/dt = −ω × m` in the sensor
+//! frame, exactly `m_k − m_{k−s} = −φ × (m_k + m_{k−s})/2` over a span of `s` samples (`φ` the
+//! Cayley vector of the rotation the gyroscope composes over the span); the residual of this
+//! relation with the gyroscope taken `j` samples earlier is smallest at the latency. The
+//! exponentially forgotten mean squares of the residuals for lags `j = 0 … W` (W: 40 ms, at
+//! most 32 samples, at least 2; span `s = W`; pairs weighted by the change of the rate they
+//! see, memory 30 s of informative motion; only undisturbed samples) give the estimate as the
+//! vertex of a parabola through the smallest and its neighbours. Convention: gyroscope sample k
+//! is the rate over (t_{k−1}, t_k], as in the prediction; then the estimate has no half-sample
+//! offset. Fixed-size buffers, no allocation.
+//!
 //! The first sample initializes the state: tilt from the accelerometer, heading from the
 //! magnetometer (without one the heading is uniform: honestly unknown), each with the
 //! concentration of [`AhrsParams::init_std`] — unless a start was given with
@@ -53,12 +74,14 @@ use crate::filter::{BinghamFilter, Noise};
 use crate::observation::{noise_from_angle_std, observation_exponent};
 use crate::quaternion::q4;
 
+mod latency;
 mod lowpass;
 mod params;
 mod vec3;
 
+use latency::{turn_forward, LatencyEstimator};
 use lowpass::{Coeffs, InertialLowPass};
-pub use params::{AhrsParams, MAX_SAMPLE_TIME, MIN_SAMPLE_TIME, MIN_STEP_NOISE};
+pub use params::{AhrsParams, MAX_LATENCY, MAX_SAMPLE_TIME, MIN_SAMPLE_TIME, MIN_STEP_NOISE};
 use vec3::{cross3, dot3, norm3, scale3};
 
 /// The world's "up" (ENU).
@@ -111,6 +134,8 @@ pub struct Ahrs {
     mag: Option<MagRef>,
     acc_filter: InertialLowPass,
     mag_filter: Option<InertialLowPass>,
+    /// The online estimate of the magnetometer's latency (a readout; not used by the filter).
+    latency: LatencyEstimator,
     samples: u64,
 }
 
@@ -134,6 +159,7 @@ impl Ahrs {
             mag: None,
             acc_filter: InertialLowPass::new(coeffs.acc, coeffs.acc_warmup, &[0.0; 3]),
             mag_filter: None,
+            latency: LatencyEstimator::new(params.sample_time),
             samples: 0,
         })
     }
@@ -233,6 +259,28 @@ impl Ahrs {
         self.bias
     }
 
+    /// The online estimate of the magnetometer's latency behind the gyroscope (s, within 0 and
+    /// 40 ms or 32 samples, whichever is smaller; at least 2 samples), from the IMU alone: the
+    /// lag at which the field's change best fits `dm/dt = −ω × m` (see the module
+    /// documentation, "Latency"). A readout: the filter does not use it (set
+    /// [`AhrsParams::mag_latency`] to compensate a latency); it estimates the latency of the raw
+    /// samples whatever `mag_latency` is.
+    ///
+    /// `None` until 5 s of informative motion have been seen — seconds of samples weighted by
+    /// `g²/(g² + 1)`, `g` the change of the rotation rate across the lag window perpendicular
+    /// to the field, in rad/s² (a constant rotation fits every lag and counts little) — with
+    /// the magnetometer present and undisturbed, or when the residuals do not single out a lag.
+    pub fn mag_latency_estimate(&self) -> Option<f64> {
+        self.latency.estimate()
+    }
+
+    /// The latency estimate, or an [`Error::NotConverged`] saying why there is none.
+    pub(crate) fn mag_latency_estimate_or_error(&self) -> Result<f64> {
+        self.latency
+            .estimate()
+            .ok_or_else(|| Error::NotConverged(self.latency.why_none()))
+    }
+
     /// Processes one sample: `gyr` (rad/s), `acc` (m/s²), `mag` (any unit, or `None`).
     ///
     /// Refused (error, nothing changed): NaN/Inf in any value ([`Error::InvalidArgument`]);
@@ -283,12 +331,15 @@ impl Ahrs {
         let dq = q4::from_rotation_vector(&w);
         f.predict_prepared(&dq, &self.noise)?;
         let q_prior = f.mode4();
+        // Latency compensation: each sample turned forward by the rate over its latency.
+        let acc_now = turn_forward(acc, &w, c.acc_lead);
+        let mag_now = mag.map(|m| turn_forward(m, &w, c.mag_lead));
 
         // 3. Accelerometer: "up" seen in the sensor frame, low-passed in the inertial frame.
         let mut acc_filter = self.acc_filter.clone();
         acc_filter.turn(&dq);
-        if norm3(acc) >= 0.25 * p.gravity {
-            acc_filter.step(acc);
+        if norm3(&acc_now) >= 0.25 * p.gravity {
+            acc_filter.step(&acc_now);
         }
         let an = norm3(&acc_filter.y);
         if an >= 0.25 * p.gravity {
@@ -303,12 +354,14 @@ impl Ahrs {
         let mut mag_ref = self.mag.clone();
         let mut mag_filter = self.mag_filter.clone();
         let mut heading_observed = false;
+        let mut mag_undisturbed = false;
         if let Some(mf) = mag_filter.as_mut() {
             mf.turn(&dq);
         }
-        if let Some(m) = mag {
+        if let Some(m) = mag_now.as_ref() {
             let q = f.mode4();
             if let Some(kappa) = self.magnetic_weight(&q, m, &mut mag_ref) {
+                mag_undisturbed = true;
                 let mf =
                     mag_filter.get_or_insert_with(|| InertialLowPass::new(c.mag, c.mag_warmup, m));
                 mf.step(m);
@@ -354,6 +407,9 @@ impl Ahrs {
         self.mag = mag_ref;
         self.acc_filter = acc_filter;
         self.mag_filter = mag_filter;
+        // the latency estimate works on the raw samples (infallible: after every fallible step)
+        self.latency
+            .push(&dq, if mag_undisturbed { mag } else { None });
         self.samples += 1;
         Ok(())
     }
@@ -408,6 +464,19 @@ impl Ahrs {
     /// The first sample: tilt from `acc`, heading from `mag` (uniform without it).
     fn initialize(&mut self, gyr: &[f64; 3], acc: &[f64; 3], mag: Option<&[f64; 3]>) -> Result<()> {
         let p = self.params;
+        let acc_raw = acc;
+        // the latency compensation of `update`, with the rate of this sample
+        let w = scale3(
+            &[
+                gyr[0] - self.bias[0],
+                gyr[1] - self.bias[1],
+                gyr[2] - self.bias[2],
+            ],
+            p.sample_time,
+        );
+        let acc = &turn_forward(acc, &w, self.coeffs.acc_lead);
+        let mag_now = mag.map(|m| turn_forward(m, &w, self.coeffs.mag_lead));
+        let mag = mag_now.as_ref();
         let an = norm3(acc);
         if an < 0.25 * p.gravity {
             return Err(Error::InvalidArgument(format!(
@@ -458,7 +527,7 @@ impl Ahrs {
         }
         self.filter = Some(f);
         self.gyr_lp = *gyr;
-        self.acc_lp = *acc;
+        self.acc_lp = *acc_raw;
         self.acc_filter = InertialLowPass::new(self.coeffs.acc, self.coeffs.acc_warmup, acc);
         self.mag_filter =
             mag.map(|m| InertialLowPass::new(self.coeffs.mag, self.coeffs.mag_warmup, m));

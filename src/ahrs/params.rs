@@ -12,6 +12,14 @@ pub const MAX_SAMPLE_TIME: f64 = 1e3;
 /// it the noise's concentration leaves the moment matching's range.
 pub const MIN_STEP_NOISE: f64 = 1e-6;
 
+/// The largest sensor latency (s) the AHRS accepts for `mag_latency` and `acc_latency`
+/// (`BINGHAM_AHRS_MAX_LATENCY` in C). The compensation turns a sample by the current rate
+/// times the latency (a constant-rate extrapolation), which only holds over a fraction of the
+/// motion's time scale; real offsets between the channels of an IMU are milliseconds to a few
+/// tens of milliseconds. The bound also refuses a latency given in milliseconds instead of
+/// seconds.
+pub const MAX_LATENCY: f64 = 0.5;
+
 /// Parameters of the AHRS (`bingham_ahrs_params` in C, `AhrsParams` in Rust). The defaults —
 /// `bingham_ahrs_params_default()` in C, `AhrsParams::new(sample_time)` in Rust — are the tuned
 /// set: tuned once on the nine BROAD trials, one set for all recordings. Angles in radians,
@@ -63,6 +71,20 @@ pub struct AhrsParams {
     pub rest_bias_time: f64,
     /// Angular standard deviation (rad) of the initial tilt and heading.
     pub init_std: f64,
+    /// Latency (s, 0 to 0.5 = `BINGHAM_AHRS_MAX_LATENCY`) of the magnetometer behind the
+    /// gyroscope: magnetometer sample k shows the field of the time `t_k − mag_latency`. Each
+    /// field sample is turned forward by the bias-corrected rate of its sample times the
+    /// latency (in the sensor frame `m ← exp(−[ω]× mag_latency) m`: the rotation by the
+    /// rotation vector `−ω·mag_latency`) before the disturbance test and the low-pass filter.
+    /// Default 0: no compensation. The AHRS estimates this latency from the data as a readout
+    /// (`bingham_ahrs_mag_latency_estimate()` in C, `Ahrs::mag_latency_estimate` in Rust). The
+    /// time of gyroscope sample k is taken as its interval (t_{k−1}, t_k], the interval over
+    /// which the prediction turns the state with it.
+    pub mag_latency: f64,
+    /// Latency (s, 0 to 0.5 = `BINGHAM_AHRS_MAX_LATENCY`) of the accelerometer behind the
+    /// gyroscope, compensated as `mag_latency`: each sample is turned forward by the rate times
+    /// the latency before the low-pass filter. Default 0: no compensation.
+    pub acc_latency: f64,
 }
 
 impl AhrsParams {
@@ -88,12 +110,15 @@ impl AhrsParams {
             rest_acc: 0.5,
             rest_bias_time: 2.0,
             init_std: 0.1,
+            mag_latency: 0.0,
+            acc_latency: 0.0,
         }
     }
 
     /// Checks every field (finite; periods, noises and thresholds positive; `bias_time ≥ 0`;
     /// `sample_time` within [`MIN_SAMPLE_TIME`, `MAX_SAMPLE_TIME`]; the process noise per step
-    /// at least [`MIN_STEP_NOISE`]).
+    /// at least [`MIN_STEP_NOISE`]; `mag_latency` and `acc_latency` within 0 to
+    /// [`MAX_LATENCY`]).
     pub fn validate(&self) -> Result<()> {
         let positive = [
             ("sample_time", self.sample_time),
@@ -141,6 +166,16 @@ impl AhrsParams {
                 "AHRS parameter `bias_time` must be finite and >= 0, got {}",
                 self.bias_time
             )));
+        }
+        for (name, v) in [
+            ("mag_latency", self.mag_latency),
+            ("acc_latency", self.acc_latency),
+        ] {
+            if !(0.0..=MAX_LATENCY).contains(&v) {
+                return Err(Error::InvalidArgument(format!(
+                    "AHRS parameter `{name}` must lie in [0, {MAX_LATENCY}] s, got {v}"
+                )));
+            }
         }
         Ok(())
     }

@@ -385,3 +385,41 @@ pub unsafe extern "C" fn bingham_ahrs_gyro_bias(
         }
     })
 }
+
+/// The online estimate of the magnetometer's latency behind the gyroscope, in seconds, from the
+/// IMU alone: the lag at which the change of the field best fits the rotation the gyroscope
+/// measures (in a homogeneous field `dm/dt = -w x m` in the sensor frame). A readout: the
+/// filter does not use it; to compensate a latency, set `mag_latency` in
+/// `bingham_ahrs_params`. It estimates the latency of the raw samples, whatever `mag_latency`
+/// is. Range: 0 to 40 ms or 32 samples, whichever is smaller (at least 2 samples). Time
+/// convention: gyroscope sample k is the rate over the interval (t_{k-1}, t_k], as in the
+/// prediction (for a gyroscope that samples the rate at t_k the estimate is the latency plus
+/// half a sample, which is what the compensation needs).
+///
+/// Available once 5 s of informative motion have been seen: seconds of samples with the
+/// magnetometer present and undisturbed, weighted by g^2/(g^2 + 1), g the change of the
+/// rotation rate across the lag window perpendicular to the field in rad/s^2 (a sensor at rest
+/// or turning at a constant rate tells the lags apart poorly and counts little). The memory is
+/// about 30 s of such motion.
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `latency`), `BINGHAM_ERR_NOT_CONVERGED` (no
+/// estimate yet; the message says how much informative motion has been seen, or that the
+/// residuals do not single out a lag). On error `*latency` is not written.
+///
+/// # Safety
+/// `a`: a live handle; `latency`: 1 writable double.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_mag_latency_estimate(
+    a: *const bingham_ahrs,
+    latency: *mut f64,
+) -> bingham_status {
+    guard("bingham_ahrs_mag_latency_estimate", || {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            getter(a, args!(latency: out [1]), |ahrs, v| {
+                v[0] = ahrs.mag_latency_estimate_or_error()?;
+                Ok(())
+            })
+        }
+    })
+}

@@ -1,6 +1,7 @@
 //! The AHRS: random sample streams.
 //!
-//! One case is an AHRS (sample time sometimes hostile) fed a simulated IMU stream through
+//! One case is an AHRS (sample time and latencies sometimes hostile; valid latencies kept, so the
+//! compensation runs on the hostile samples too) fed a simulated IMU stream through
 //! bingham_ahrs_update and the batch functions, with hostile samples mixed in (NaN/Inf, zero and
 //! huge vectors, subnormals, NULL and misaligned pointers, a NaN in the middle of a batch) and
 //! bingham_ahrs_set_state calls (valid starts near the truth, any orthogonal M, huge / tiny /
@@ -35,6 +36,32 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
         _ => *rng.pick(&[0.01, 0.005, 1.0 / 400.0, 0.02]),
     };
     let valid_dt = (1e-6..=1e3).contains(&dt);
+    // the latencies (s): valid 0..=0.5, or hostile
+    let latency = |rng: &mut Rng64| match rng.below(4) {
+        0 => *rng.pick(&[
+            -1e-9,
+            -0.01,
+            0.5 + 1e-9,
+            11.0,
+            f64::MAX,
+            f64::NAN,
+            f64::INFINITY,
+        ]),
+        1 => *rng.pick(&[0.0, -0.0, 5e-324, 1e-3, 0.011, 0.5]),
+        _ => 0.0,
+    };
+    let (mag_latency, acc_latency) = (latency(&mut rng), latency(&mut rng));
+    let valid_latency = |v: f64| (0.0..=0.5).contains(&v);
+    // the field the message of bingham_ahrs_new must name (sample_time is checked first)
+    let bad_field = if !valid_dt {
+        Some("sample_time")
+    } else if !valid_latency(mag_latency) {
+        Some("mag_latency")
+    } else if !valid_latency(acc_latency) {
+        Some("acc_latency")
+    } else {
+        None
+    };
     // SAFETY (all calls below): live handles and buffers of the documented lengths, or NULL /
     // misaligned pointers that must be refused before any access.
     let mut p: bingham_ahrs_params = unsafe { std::mem::zeroed() };
@@ -66,12 +93,14 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
             return Err(format!("params_default(0.01): {}", last_error()));
         }
         p.sample_time = dt;
-    } else if p.sample_time != dt {
+    } else if p.sample_time != dt || p.mag_latency != 0.0 || p.acc_latency != 0.0 {
         return Err(format!(
-            "params_default: sample_time {} ≠ {dt}",
-            p.sample_time
+            "params_default: sample_time {} ≠ {dt} or latencies {} {} ≠ 0",
+            p.sample_time, p.mag_latency, p.acc_latency
         ));
     }
+    p.mag_latency = mag_latency;
+    p.acc_latency = acc_latency;
     let mut out = [ahrs_sentinel()];
     let null_attack = rng.chance(0.05);
     prime_last_error("bingham_ahrs_new");
@@ -89,14 +118,15 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
     calls += 1;
     let want = if null_attack {
         BINGHAM_ERR_NULL_ARGUMENT
-    } else if !valid_dt {
+    } else if bad_field.is_some() {
         BINGHAM_ERR_INVALID_ARGUMENT
     } else {
         BINGHAM_OK
     };
     if st != want {
         return Err(format!(
-            "bingham_ahrs_new (sample_time {dt:e}): {} instead of {} ({})",
+            "bingham_ahrs_new (sample_time {dt:e}, latencies {mag_latency:e} {acc_latency:e}): \
+             {} instead of {} ({})",
             status_name(st),
             status_name(want),
             last_error()
@@ -107,11 +137,10 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
             return Err("bingham_ahrs_new wrote *out on error".into());
         }
         check_error_message("bingham_ahrs_new")?;
-        if !null_attack && !last_error().contains("sample_time") {
-            return Err(format!(
-                "message does not name sample_time: {}",
-                last_error()
-            ));
+        if let Some(field) = bad_field.filter(|_| !null_attack) {
+            if !last_error().contains(field) {
+                return Err(format!("message does not name {field}: {}", last_error()));
+            }
         }
         let st = unsafe { bingham_ahrs_params_default(0.01, &mut p) };
         assert_eq!(st, BINGHAM_OK);
@@ -127,7 +156,10 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
     }
     let dt = p.sample_time;
     if verbose {
-        eprintln!("sample_time {dt:e}");
+        eprintln!(
+            "sample_time {dt:e}, latencies {:e} {:e}",
+            p.mag_latency, p.acc_latency
+        );
     }
     let mut imu = Imu {
         q: {
@@ -359,7 +391,7 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                 }
             } else if r < 9 {
                 // --- getters with NULL / misaligned arguments
-                let which = rng.below(4);
+                let which = rng.below(5);
                 let null_handle = rng.chance(0.5);
                 let mut buf = Buf::sentinel(16);
                 let mut buf2 = Buf::sentinel(4);
@@ -380,6 +412,10 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                         0 => ("bingham_ahrs_quaternion", bingham_ahrs_quaternion(ap, o1)),
                         1 => ("bingham_ahrs_state", bingham_ahrs_state(ap, o1, o2)),
                         2 => ("bingham_ahrs_gyro_bias", bingham_ahrs_gyro_bias(ap, o1)),
+                        3 => (
+                            "bingham_ahrs_mag_latency_estimate",
+                            bingham_ahrs_mag_latency_estimate(ap, o1),
+                        ),
                         _ => (
                             "bingham_ahrs_angular_spread",
                             bingham_ahrs_angular_spread(ap, o1),

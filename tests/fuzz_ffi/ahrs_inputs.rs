@@ -19,7 +19,9 @@ pub(crate) fn ahrs_sentinel() -> *mut bingham_ahrs {
     0xDEAD_BEE0usize as *mut bingham_ahrs
 }
 
-/// Everything the getters show, as bits: q (4), M (16), z (4), bias (3), spread (4).
+/// Everything the getters show, as bits: q (4), M (16), z (4), bias (3), spread (4), and the
+/// magnetometer latency estimate (status, value: OK with a finite value ≥ 0, or NOT_CONVERGED
+/// with the output untouched).
 pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
     let (mut q, mut m, mut z, mut b, mut s) = ([0.0; 4], [0.0; 16], [0.0; 4], [0.0; 3], [0.0; 4]);
     // SAFETY: a is live; buffers of the documented lengths.
@@ -39,6 +41,20 @@ pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
         // log F is total for every finite z: the moments of any valid state can be evaluated.
         return Err(format!("angular spread failed: {}", last_error()));
     }
+    let mut l = [f64::from_bits(0x7FF4_DEAD_BEEF_0001)];
+    // SAFETY: as above.
+    let st = unsafe { bingham_ahrs_mag_latency_estimate(a, l.as_mut_ptr()) };
+    match st {
+        BINGHAM_OK if l[0].is_finite() && l[0] >= 0.0 => {}
+        BINGHAM_ERR_NOT_CONVERGED if l[0].to_bits() == 0x7FF4_DEAD_BEEF_0001 => {}
+        _ => {
+            return Err(format!(
+                "latency estimate: status {st:?}, value {:e} ({})",
+                l[0],
+                last_error()
+            ))
+        }
+    }
     check_unit(&q, 1e-12).map_err(|e| format!("quaternion {q:?}: {e}"))?;
     if q[0] < 0.0 {
         return Err(format!("quaternion {q:?} with w < 0"));
@@ -55,7 +71,9 @@ pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
         .chain(&z)
         .chain(&b)
         .chain(&s)
+        .chain(&l)
         .map(|v| v.to_bits())
+        .chain([st as u64])
         .collect())
 }
 
