@@ -9,7 +9,7 @@
 use bingham::ahrs::{Ahrs, AhrsParams};
 use bingham::Error;
 use std::f64::consts::PI;
-use testkit::{rot, Rng64};
+use testkit::{qexp, qmul, rot, Rng64};
 
 const G: f64 = 9.81;
 /// The magnetic field in the world frame (ENU, µT): north and down.
@@ -17,25 +17,7 @@ const FIELD: [f64; 3] = [0.0, 20.0, -40.0];
 const BIAS_DEG: f64 = 0.5;
 
 // ---------------------------------------------------------------------------------------------
-// Quaternion helpers written here (independent of the crate's `q4`).
-
-fn qmul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
-    [
-        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
-        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
-        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
-        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
-    ]
-}
-
-fn qexp(w: &[f64; 3]) -> [f64; 4] {
-    let th = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-    if th == 0.0 {
-        return [1.0, 0.0, 0.0, 0.0];
-    }
-    let s = (0.5 * th).sin() / th;
-    [(0.5 * th).cos(), s * w[0], s * w[1], s * w[2]]
-}
+// Quaternion helpers independent of the crate's `q4` (qmul, qexp, rot: testkit).
 
 fn normalize4(q: &[f64; 4]) -> [f64; 4] {
     let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();

@@ -12,29 +12,11 @@
 use bingham::ahrs::{Ahrs, AhrsParams, MAX_LATENCY};
 use bingham::Error;
 use std::f64::consts::PI;
-use testkit::{rot, Rng64};
+use testkit::{qexp, qmul, rot, Rng64};
 
 /// The field in the world frame (ENU, µT): 50 µT, 60° dip, north.
 const FIELD: [f64; 3] = [0.0, 25.0, -43.301_270_189_221_93];
 const G: f64 = 9.81;
-
-fn qmul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
-    [
-        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
-        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
-        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
-        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
-    ]
-}
-
-fn qexp(w: &[f64; 3]) -> [f64; 4] {
-    let th = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-    if th == 0.0 {
-        return [1.0, 0.0, 0.0, 0.0];
-    }
-    let s = (0.5 * th).sin() / th;
-    [(0.5 * th).cos(), s * w[0], s * w[1], s * w[2]]
-}
 
 /// `R(q)ᵀ v` (world → sensor).
 fn to_sensor(q: &[f64; 4], v: &[f64; 3]) -> [f64; 3] {

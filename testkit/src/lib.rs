@@ -49,6 +49,26 @@ pub fn matvec(r: &[[f64; 3]; 3], v: &[f64; 3]) -> [f64; 3] {
     ]
 }
 
+/// The Hamilton product `a b` (scalar first), written out (independent of the crate's `q4`).
+pub fn qmul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}
+
+/// The unit quaternion of the rotation vector `w` (rad): `(cos(θ/2), sin(θ/2) w/θ)`, θ = |w|.
+pub fn qexp(w: &[f64; 3]) -> [f64; 4] {
+    let th = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+    if th == 0.0 {
+        return [1.0, 0.0, 0.0, 0.0];
+    }
+    let s = (0.5 * th).sin() / th;
+    [(0.5 * th).cos(), s * w[0], s * w[1], s * w[2]]
+}
+
 /// `R(q)` of a unit quaternion (scalar first, `v_world = q v q*`), the textbook formula.
 pub fn rot(q: &[f64; 4]) -> [[f64; 3]; 3] {
     let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
