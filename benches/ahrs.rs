@@ -2,7 +2,9 @@
 //!
 //! The AHRS runs on a pre-generated simulated IMU stream at 100 Hz (smooth motion, gyroscope
 //! bias and noise, accelerometer and magnetometer with noise), cycled: one sample per
-//! iteration, so the state stays in its normal operating range.
+//! iteration, so the state stays in its normal operating range. The same motion sampled at
+//! 286 Hz and 1 kHz (`…_286hz`, `…_1khz`): the online latency estimate's work per sample grows
+//! with its lag window (5, 13 and 33 lags).
 
 use bingham::ahrs::{Ahrs, AhrsParams};
 use bingham::filter::BinghamFilter;
@@ -19,14 +21,19 @@ struct Sample {
     mag: [f64; 3],
 }
 
-/// 60 s of simulated IMU data.
+/// 60 s of simulated IMU data at 100 Hz.
 fn stream() -> Vec<Sample> {
+    stream_at(DT)
+}
+
+/// 60 s of simulated IMU data at the sample time `dt`.
+fn stream_at(dt: f64) -> Vec<Sample> {
     let mut rng = Rng64(7);
     let mut q = [1.0, 0.0, 0.0, 0.0];
     let bias = [0.008, -0.008, 0.008];
-    (0..6000)
+    (0..(60.0 / dt).round() as usize)
         .map(|k| {
-            let t = k as f64 * DT;
+            let t = k as f64 * dt;
             let w = [
                 0.9 * (0.7 * t).sin() + 0.3 * (5.2 * t).sin(),
                 0.7 * (0.4 * t + 1.0).sin() + 0.25 * (3.8 * t).cos(),
@@ -34,7 +41,7 @@ fn stream() -> Vec<Sample> {
             ];
             q = q4::mul(
                 &q,
-                &q4::from_rotation_vector(&[w[0] * DT, w[1] * DT, w[2] * DT]),
+                &q4::from_rotation_vector(&[w[0] * dt, w[1] * dt, w[2] * dt]),
             );
             let a = q4::rotate_inverse(&q, &[0.0, 0.0, 9.81]);
             let m = q4::rotate_inverse(&q, &[0.0, 20.0, -40.0]);
@@ -47,14 +54,20 @@ fn stream() -> Vec<Sample> {
 }
 
 fn bench_ahrs(c: &mut Criterion) {
-    let data = stream();
-    let params = AhrsParams::new(DT);
+    let streams = [
+        (DT, stream()),
+        (1.0 / 285.714, stream_at(1.0 / 285.714)),
+        (1e-3, stream_at(1e-3)),
+    ];
     let mut g = c.benchmark_group("ahrs");
-    for (name, with_mag) in [
-        ("ahrs_update_gyr_acc_mag", true),
-        ("ahrs_update_gyr_acc", false),
+    for (name, with_mag, which) in [
+        ("ahrs_update_gyr_acc_mag", true, 0),
+        ("ahrs_update_gyr_acc", false, 0),
+        ("ahrs_update_gyr_acc_mag_286hz", true, 1),
+        ("ahrs_update_gyr_acc_mag_1khz", true, 2),
     ] {
-        let mut a = Ahrs::new(&params).unwrap();
+        let (dt, data) = &streams[which];
+        let mut a = Ahrs::new(&AhrsParams::new(*dt)).unwrap();
         let mut k = 0usize;
         g.bench_function(name, |b| {
             b.iter(|| {

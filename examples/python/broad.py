@@ -4,6 +4,7 @@ and Mahony on nine trials of BROAD, with BROAD's own error metric.
 
     usage: python3 examples/python/broad.py [DATA_DIR] [--plot FILE.svg] [--trial NN]
                                             [--only NN,NN] [--no-peers] [--json OUT.json] [--jobs N]
+                                            [--mag-latency SECONDS|estimate]
 
 Data: BROAD, the Berlin Robust Orientation Estimation Assessment Dataset: D. Laidig, M. Caruso,
 A. Cereatti, T. Seel, "BROAD - A Benchmark for Robust Inertial Orientation Estimation", Data 6(7):72,
@@ -16,7 +17,11 @@ sensor -> ENU) and movement. Every filter runs causally over the whole trial wit
 set for all trials:
 
 * Bingham: ``bingham.Ahrs(Ts).update_batch(gyr, acc, mag, spread=True)`` with its default
-  (tuned) parameters; also gives the predicted total angular standard deviation ("spread");
+  (tuned) parameters; also gives the predicted total angular standard deviation ("spread") and,
+  after the last sample, its online estimate of the magnetometer's latency (printed per trial).
+  ``--mag-latency SECONDS`` sets ``mag_latency``; ``--mag-latency estimate`` runs each trial
+  twice and sets it to the first run's final estimate (a per-trial calibration from the whole
+  trial, not causal; the time is that of the second run);
 * VQF: ``vqf.VQF(Ts)`` default parameters, online 9-D output ``quat9D`` (C++ batch call);
 * Madgwick: ``ahrs.filters.Madgwick(gyr, acc, mag, frequency, gain=0.12)`` (the class's own batch
   loop and initial quaternion), earth frame turned to ENU by ``(1/√2, 0, 0, 1/√2) ⊗ q``;
@@ -101,14 +106,30 @@ def _bingham():
     return bingham
 
 
-def run_ours(trial):
-    """The Bingham AHRS on one trial: (quaternions N×4, predicted spread N in rad, seconds)."""
+def run_bingham(trial, mag_latency=0.0):
+    """The Bingham AHRS on one trial: (quaternions N×4, predicted spread N in rad, seconds,
+    {"mag_latency": the latency compensated (s), "mag_latency_estimate": the AHRS's online
+    estimate after the last sample (s, or None)}). ``mag_latency``: seconds, or ``"estimate"``:
+    a first run with the defaults, then the timed run with ``mag_latency`` = the first run's
+    final estimate (a per-trial calibration from the whole trial, not causal)."""
     import bingham
-    ahrs_filter = bingham.Ahrs(trial["Ts"])
+    if mag_latency == "estimate":
+        first = bingham.Ahrs(trial["Ts"])
+        first.update_batch(trial["gyr"], trial["acc"], trial["mag"])
+        mag_latency = first.mag_latency_estimate() or 0.0
+    ahrs_filter = bingham.Ahrs(trial["Ts"], mag_latency=float(mag_latency))
     t0 = time.perf_counter()
     q, spread = ahrs_filter.update_batch(trial["gyr"], trial["acc"], trial["mag"], spread=True)
-    return np.asarray(q, dtype=np.float64), np.asarray(spread, dtype=np.float64), \
-        time.perf_counter() - t0
+    seconds = time.perf_counter() - t0
+    readout = {"mag_latency": float(mag_latency),
+               "mag_latency_estimate": ahrs_filter.mag_latency_estimate()}
+    return np.asarray(q, dtype=np.float64), np.asarray(spread, dtype=np.float64), seconds, readout
+
+
+def run_ours(trial):
+    """The Bingham AHRS with its defaults on one trial: (quaternions N×4, predicted spread N in
+    rad, seconds)."""
+    return run_bingham(trial)[:3]
 
 
 def run_vqf(trial):
@@ -172,21 +193,28 @@ def load_trial(path):
 
 
 def evaluate(job):
-    """Runs the filters on one trial; returns (results, total-error series for the plot or None)."""
-    path, filters, keep_series = job
+    """Runs the filters on one trial; returns (results, total-error series for the plot or None).
+    ``job``: (path, filters, keep_series[, mag_latency of the Bingham AHRS, see run_bingham])."""
+    path, filters, keep_series = job[:3]
+    mag_latency = job[3] if len(job) > 3 else 0.0
     trial = load_trial(path)
     n = len(trial["gyr"])
     sel = trial["movement"] & ~np.isnan(trial["truth"][:, 0])
     res = {"samples": n, "samples_evaluated": int(sel.sum()), "filters": {}, "errors": {}}
     series = {} if keep_series else None
     for f in filters:
+        readout = {}
         try:
-            q, spread, seconds = RUNNERS[f](trial)
+            if f == "bingham":
+                q, spread, seconds, readout = run_bingham(trial, mag_latency)
+            else:
+                q, spread, seconds = RUNNERS[f](trial)
         except Exception as e:  # noqa: BLE001 -- one failing filter must not stop the others
             res["errors"][f] = f"{type(e).__name__}: {e}"
             continue
         err = errors(q, trial["truth"])
         r = {m: math.degrees(rms(err[m][sel])) for m in METRICS}
+        r.update(readout)
         r["us_per_sample"] = seconds / n * 1e6
         if spread is not None:
             r["calibration_ratio"] = rms(err["total"][sel]) / rms(spread[sel])
@@ -281,7 +309,8 @@ def group_means(trials, filters):
         for f in filters:
             rows = [trials[k]["filters"][f] for k in members if f in trials[k]["filters"]]
             if len(rows) == len(members):
-                keys = [m for m in rows[0] if all(m in r for r in rows)]
+                keys = [m for m in rows[0]
+                        if all(isinstance(r.get(m), (int, float)) for r in rows)]
                 fm[f] = {m: float(np.mean([r[m] for r in rows])) for m in keys}
         out[g] = {"trials": members, "filters": fm}
     return out
@@ -319,7 +348,11 @@ def main(argv=None):
     ap.add_argument("--json", metavar="OUT.json", help="write all numbers as JSON")
     ap.add_argument("--jobs", type=int, default=0,
                     help="worker processes over trials (default: CPU count with peers, else 1)")
+    ap.add_argument("--mag-latency", default="0", metavar="SECONDS|estimate",
+                    help="the Bingham AHRS's mag_latency: seconds (default 0), or 'estimate': "
+                         "per trial the AHRS's own final estimate from a first run")
     args = ap.parse_args(argv)
+    mag_latency = args.mag_latency if args.mag_latency == "estimate" else float(args.mag_latency)
 
     ddir = data_dir(args.data_dir)
     paths = sorted(glob.glob(os.path.join(ddir, "*.npz")))
@@ -347,7 +380,7 @@ def main(argv=None):
     plot_name = next((n for n in names if n.startswith(args.trial)), None) if args.plot else None
     if args.plot and plot_name is None:
         print(f"note: trial {args.trial} not among the evaluated trials, no plot")
-    jobs = [(p, filters, n == plot_name) for p, n in zip(paths, names)]
+    jobs = [(p, filters, n == plot_name, mag_latency) for p, n in zip(paths, names)]
     nproc = args.jobs or (min(os.cpu_count() or 1, len(paths)) if len(filters) > 1 or
                           "bingham" not in filters else 1)
     print(f"filters: {', '.join(LABELS[f] for f in filters)}; {nproc} worker process(es)\n")
@@ -387,6 +420,12 @@ def main(argv=None):
     if "bingham" in filters:
         print("Bingham cal: RMS of the actual total error / RMS of the predicted spread "
               "(1 = calibrated, > 1 = overconfident)")
+        print(f"Bingham mag_latency: {args.mag_latency}; its online estimate of the magnetometer "
+              "latency after the last sample (ms):")
+        print("  " + ", ".join(
+            f"{k[:2]} {1e3 * est:.1f}" if est is not None else f"{k[:2]} --"
+            for k, est in ((k, t["filters"].get("bingham", {}).get("mag_latency_estimate"))
+                           for k, t in trials.items())))
     print(f"wall time {wall:.1f} s")
 
     if args.plot and plot_series is not None:

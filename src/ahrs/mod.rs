@@ -300,11 +300,11 @@ impl Ahrs {
         // Work on a copy of the filter: the state is assigned only when every step succeeded.
         let mut filter = self.filter.clone().expect("initialized");
         let f = filter.core4_mut()?;
-        let p = self.params;
+        let p = &self.params;
         let dt = p.sample_time;
 
         // 1. Rest detection and the bias at rest.
-        let c = self.coeffs;
+        let c = &self.coeffs;
         let mut gyr_lp = self.gyr_lp;
         let mut acc_lp = self.acc_lp;
         for i in 0..3 {
