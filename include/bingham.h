@@ -136,6 +136,12 @@
 #define BINGHAM_AHRS_MAX_LATENCY 0.5
 
 /**
+ * The value of [`AhrsParams::mag_latency`] that compensates the AHRS's online estimate of
+ * the magnetometer's latency (`BINGHAM_AHRS_LATENCY_ESTIMATE` in C; the default).
+ */
+#define BINGHAM_AHRS_LATENCY_ESTIMATE -1.0
+
+/**
  * The result of every fallible `bingham_*` function.
  *
  * `BINGHAM_OK` (0) means success; every other value is an error, and then the function has
@@ -294,14 +300,16 @@ typedef struct bingham_ahrs_params {
      */
     double sample_time;
     /**
-     * Orientation process noise in rad/√s: the prediction adds isotropic rotation noise with
-     * standard deviation `gyro_noise·√sample_time` per step (gyroscope noise, bias drift and
-     * model error together).
+     * Orientation process noise in rad/√s: the prediction adds isotropic rotation noise of
+     * variance `gyro_noise²` per second (the gyroscope's noise and model error; the bias's
+     * uncertainty is added separately, see `bias_std`).
      */
     double gyro_noise;
     /**
-     * Angular standard deviation (rad) of one accelerometer direction sample as a measurement
-     * of "up" (`κ = 1/acc_noise²`).
+     * Angular standard deviation (rad) of the low-passed accelerometer direction as a
+     * measurement of "up". Its errors (linear accelerations that have not averaged out) are
+     * correlated over `acc_tau`, so it is worth `1/(acc_noise²·acc_tau)` rad⁻² of tilt
+     * precision per second, whatever the sample rate.
      */
     double acc_noise;
     /**
@@ -323,7 +331,8 @@ typedef struct bingham_ahrs_params {
      */
     double gravity;
     /**
-     * Angular standard deviation (rad) of one magnetometer heading sample (`κ = 1/mag_noise²`).
+     * Angular standard deviation (rad) of the low-passed field's heading as a measurement of
+     * the heading; worth `1/(mag_noise²·mag_tau)` rad⁻² of heading precision per second.
      */
     double mag_noise;
     /**
@@ -343,8 +352,10 @@ typedef struct bingham_ahrs_params {
      */
     double mag_new_time;
     /**
-     * Time constant (s) of the gyroscope-bias estimation from the observations' corrections
-     * during motion (`0` disables it).
+     * Forgetting time (s) of the gyroscope-bias estimate: the bias is modelled as a random
+     * walk whose variance grows by `bias_std²` per `bias_time`, so older evidence about it
+     * counts less. `0` disables the estimation in motion (the bias is then learned at rest
+     * only; its uncertainty still widens the orientation's spread).
      */
     double bias_time;
     /**
@@ -377,8 +388,9 @@ typedef struct bingham_ahrs_params {
      * field sample is turned forward by the bias-corrected rate of its sample times the
      * latency (in the sensor frame `m ← exp(−[ω]× mag_latency) m`: the rotation by the
      * rotation vector `−ω·mag_latency`) before the disturbance test and the low-pass filter.
-     * Default 0: no compensation. The AHRS estimates this latency from the data as a readout
-     * (`bingham_ahrs_mag_latency_estimate()` in C, `Ahrs::mag_latency_estimate` in Rust). The
+     * `LATENCY_ESTIMATE` (−1, `BINGHAM_AHRS_LATENCY_ESTIMATE` in C; the default): compensate
+     * the AHRS's own online estimate (`bingham_ahrs_mag_latency_estimate()` in C,
+     * `Ahrs::mag_latency_estimate` in Rust), none until it exists. `0`: no compensation. The
      * time of gyroscope sample k is taken as its interval (t_{k−1}, t_k], the interval over
      * which the prediction turns the state with it.
      */
@@ -389,6 +401,20 @@ typedef struct bingham_ahrs_params {
      * the latency before the low-pass filter. Default 0: no compensation.
      */
     double acc_latency;
+    /**
+     * Initial standard deviation (rad/s, per axis) of the gyroscope bias: the Kalman filter of
+     * the bias starts from 0 with this uncertainty, which sets how fast a bias is learned
+     * from the corrections during motion, and how much an unknown bias widens the
+     * orientation's spread.
+     */
+    double bias_std;
+    /**
+     * Process noise (√s) per rad/s of rotation rate: the orientation's noise variance grows by
+     * `(gyro_scale_noise·|ω|)²` per second on top of `gyro_noise²` (scale-factor and
+     * axis-misalignment errors, and residual latency, turn into angle errors in proportion
+     * to the rate).
+     */
+    double gyro_scale_noise;
 } bingham_ahrs_params;
 
 #ifdef __cplusplus
@@ -1301,9 +1327,9 @@ enum bingham_status bingham_filter_angular_spread(const struct bingham_filter *f
 enum bingham_status bingham_ahrs_params_default(double sample_time, struct bingham_ahrs_params *p);
 
 /**
- * Creates an AHRS with the parameters `p` (validated: every field finite, periods, noises and
- * thresholds > 0, `bias_time` ≥ 0, `sample_time` within 1e-6..1e3 s, the process noise per
- * step `gyro_noise·sqrt(sample_time)` at least 1e-6 rad).
+ * Creates an AHRS with the parameters `p` (validated: every field finite, periods, noises,
+ * thresholds and `bias_std` > 0, `bias_time` and `gyro_scale_noise` ≥ 0, `sample_time` within
+ * 1e-6..1e3 s, the process noise per step `gyro_noise·sqrt(sample_time)` at least 1e-6 rad).
  *
  * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`, `out`), `BINGHAM_ERR_INVALID_ARGUMENT` (a bad
  * field; the message names it). On error `*out` is not written.
@@ -1336,15 +1362,21 @@ enum bingham_status bingham_ahrs_clone(const struct bingham_ahrs *a, struct bing
 /**
  * Processes one sample.
  *
- * - `gyr`: angular rate, rad/s, sensor frame (3 doubles).
- * - `acc`: specific force, m/s², sensor frame (+g up at rest). Its update is skipped (not an
- *   error) when `|acc| < gravity/4` (free fall); the very first sample must show gravity.
+ * - `gyr`: angular rate, rad/s, sensor frame (3 doubles). Required in every sample: a NaN or
+ *   ±Inf entry refuses the sample.
+ * - `acc`: specific force, m/s², sensor frame (+g up at rest). A NaN or ±Inf entry means "no
+ *   accelerometer sample" at this time (not an error): the gyroscope and the magnetometer of
+ *   the sample are still used. Its update is also skipped (not an error) when
+ *   `|acc| < gravity/4` (free fall). The very first sample must have a finite accelerometer
+ *   showing gravity (`|acc| >= gravity/4`): it initializes the tilt.
  * - `mag`: magnetic field, any consistent unit (3 doubles), or `NULL` (6-D filter: no heading
- *   information). A zero field, a field along the vertical or a disturbed field is skipped.
+ *   information). A NaN or ±Inf entry means "no magnetometer sample" at this time, as `NULL`
+ *   (not an error). A zero field, a field along the vertical or a disturbed field is skipped.
  *
  * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `gyr`, `acc`), `BINGHAM_ERR_INVALID_ARGUMENT`
- * (NaN/Inf in a sample; a first sample without gravity), `BINGHAM_ERR_NOT_CONVERGED` /
- * `BINGHAM_ERR_NUMERICAL` (internal). On error the AHRS is unchanged: the sample is refused.
+ * (NaN/Inf in `gyr`; a first sample without a finite accelerometer showing gravity),
+ * `BINGHAM_ERR_NOT_CONVERGED` / `BINGHAM_ERR_NUMERICAL` (internal). On error the AHRS is
+ * unchanged: the sample is refused.
  *
  * # Safety
  * `a`: a live handle; `gyr`, `acc`: 3 readable doubles each; `mag`: `NULL` or 3 readable
@@ -1362,9 +1394,16 @@ enum bingham_status bingham_ahrs_update(struct bingham_ahrs *a,
  * - `gyr`, `acc`: n×3 row-major; `mag`: n×3 row-major or `NULL`.
  * - `quat`: n×4 row-major output (w, x, y, z per row, sensor → world ENU, w ≥ 0).
  *
- * A refused sample (see `bingham_ahrs_update()`) stops the batch: the samples before it are
- * processed and their rows of `quat` written, the rest untouched; the error message names the
- * sample's index ("sample k: ..."). `n = 0` does nothing.
+ * Per channel, as in `bingham_ahrs_update()`: a row of `acc` or `mag` holding NaN (or ±Inf)
+ * means "no sample" of that sensor at that time, so sensors sampled at lower rates than the
+ * gyroscope, or with gaps, fit in one batch (fill their missing rows with NaN); every row of
+ * `gyr` must be finite.
+ *
+ * A refused sample (see `bingham_ahrs_update()`: NaN/Inf in its `gyr` row, or a first sample
+ * without a finite accelerometer showing gravity) stops the batch: the samples before it are
+ * processed and their rows of `quat` written, the refused one changes nothing, the rest are
+ * untouched; the error message names the sample's index ("sample k: ..."). `n = 0` does
+ * nothing.
  *
  * Errors: `BINGHAM_ERR_NULL_ARGUMENT`, `BINGHAM_ERR_INVALID_DIMENSION` (n×4 overflows),
  * those of `bingham_ahrs_update()`.
@@ -1464,6 +1503,23 @@ enum bingham_status bingham_ahrs_angular_spread(const struct bingham_ahrs *a, do
  * `a`: a live handle; `bias`: 3 writable doubles.
  */
 enum bingham_status bingham_ahrs_gyro_bias(const struct bingham_ahrs *a, double *bias);
+
+/**
+ * The covariance of the gyroscope bias estimate, in (rad/s)², sensor frame: a 3×3 matrix
+ * written row-major into `cov` (9 doubles; `cov[3*i + j]` is the covariance of the bias
+ * components i and j), symmetric positive semi-definite. The square roots of its diagonal
+ * are the standard deviations (rad/s) of the components of `bingham_ahrs_gyro_bias()`.
+ *
+ * It is `bias_std²·I` (see `bingham_ahrs_params`) on creation and until the first sample has
+ * been processed; then it shrinks as the corrections during motion and the rests teach the
+ * bias, and grows by `bias_std²/bias_time` per second (not at all with `bias_time = 0`).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `cov`). On error nothing is written.
+ *
+ * # Safety
+ * `a`: a live handle; `cov`: 9 writable doubles.
+ */
+enum bingham_status bingham_ahrs_gyro_bias_covariance(const struct bingham_ahrs *a, double *cov);
 
 /**
  * The online estimate of the magnetometer's latency behind the gyroscope, in seconds, from the

@@ -895,6 +895,14 @@ public:
         detail::check(bingham_ahrs_gyro_bias(a_, b.data()));
         return b;
     }
+    /// The covariance of the gyroscope bias estimate ((rad/s)^2, sensor frame): 3 x 3 ROW-MAJOR,
+    /// symmetric positive semi-definite; bias_std^2 * I on creation.
+    std::array<double, 9> gyro_bias_covariance() const {
+        require("bingham::Ahrs::gyro_bias_covariance");
+        std::array<double, 9> c{};
+        detail::check(bingham_ahrs_gyro_bias_covariance(a_, c.data()));
+        return c;
+    }
     /// The online estimate of the magnetometer's latency behind the gyroscope (s), or nullopt
     /// while there is none yet (BINGHAM_ERR_NOT_CONVERGED: less than 5 s of informative motion).
     /// A readout; set mag_latency in the parameters to compensate a latency.
@@ -922,6 +930,14 @@ public:
     Eigen::Vector3d gyro_bias_vector() const {
         const auto b = gyro_bias();
         return {b[0], b[1], b[2]};
+    }
+    /// The covariance of the gyroscope bias estimate as an Eigen matrix ((rad/s)^2).
+    Eigen::Matrix3d gyro_bias_covariance_matrix() const {
+        const auto c = gyro_bias_covariance();
+        Eigen::Matrix3d m;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) m(i, j) = c[static_cast<std::size_t>(3 * i + j)];
+        return m;
     }
 #endif
 

@@ -99,6 +99,7 @@ _SIGNATURES = {
     "bingham_ahrs_set_state": (_STATUS, [ctypes.c_void_p, _D, _D]),
     "bingham_ahrs_angular_spread": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_gyro_bias": (_STATUS, [ctypes.c_void_p, _D]),
+    "bingham_ahrs_gyro_bias_covariance": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_mag_latency_estimate": (_STATUS, [ctypes.c_void_p, _D]),
 }
 

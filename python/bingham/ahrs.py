@@ -19,7 +19,12 @@ class AhrsParams(ctypes.Structure):
     """``bingham_ahrs_params`` (all angles in radians, times in seconds); build it with
     :meth:`default`, which gives the tuned defaults. ``mag_latency`` / ``acc_latency`` (s, 0 to
     0.5, default 0): the magnetometer's / accelerometer's latency behind the gyroscope, each
-    sample turned forward by the rate over it (see :meth:`Ahrs.mag_latency_estimate`)."""
+    sample turned forward by the rate over it (see :meth:`Ahrs.mag_latency_estimate`).
+    ``bias_std`` (rad/s, > 0, default 0.5°/s): the initial standard deviation per axis of the
+    gyroscope bias, where its covariance starts (see :meth:`Ahrs.gyro_bias_covariance`).
+    ``gyro_scale_noise`` (√s, >= 0, default about 0.01): process noise per rad/s of rotation
+    rate, the orientation's noise variance growing by ``(gyro_scale_noise·|ω|)²`` per second
+    (scale-factor and misalignment errors of the gyroscope)."""
 
     _fields_ = [
         ("sample_time", ctypes.c_double),
@@ -43,6 +48,8 @@ class AhrsParams(ctypes.Structure):
         ("init_std", ctypes.c_double),
         ("mag_latency", ctypes.c_double),
         ("acc_latency", ctypes.c_double),
+        ("bias_std", ctypes.c_double),
+        ("gyro_scale_noise", ctypes.c_double),
     ]
 
     @classmethod
@@ -109,7 +116,10 @@ class Ahrs:
         return self._handle
 
     def update(self, gyr: ArrayLike, acc: ArrayLike, mag: Optional[ArrayLike] = None) -> None:
-        """One sample (3-vectors; ``mag`` may be None)."""
+        """One sample (3-vectors; ``mag`` may be None). Per channel: NaN (or ±Inf) in ``acc``
+        or ``mag`` means "no sample" of that sensor at this time (not an error); NaN/Inf in
+        ``gyr`` refuses the sample (:class:`BinghamError`, the AHRS unchanged), and so does a
+        first sample without a finite accelerometer showing gravity."""
         g = _in(gyr, "gyr", (3,))
         a = _in(acc, "acc", (3,))
         m = None if mag is None else _in(mag, "mag", (3,))
@@ -120,8 +130,11 @@ class Ahrs:
     ) -> Union[Array, Tuple[Array, Array]]:
         """n samples (n×3 arrays; ``mag`` n×3 or None). Returns the n×4 quaternions after each
         sample, or ``(quat, spread)`` with the total angular spread (radians, length n) when
-        ``spread`` is true. A refused sample raises :class:`BinghamError` (its message names the
-        sample); the samples before it have been processed."""
+        ``spread`` is true. Per channel, as in :meth:`update`: a row of ``acc`` or ``mag``
+        holding NaN means "no sample" of that sensor at that time (fill the rows of a slower or
+        gappy sensor with NaN); every row of ``gyr`` must be finite. A refused sample raises
+        :class:`BinghamError` (its message names the sample, "sample k: ..."); the samples
+        before it have been processed."""
         g = _rows3(gyr, "gyr")
         n = g.shape[0]
         a = _rows3(acc, "acc", n)
@@ -166,6 +179,14 @@ class Ahrs:
         """The gyroscope bias estimate (rad/s, sensor frame)."""
         out = np.empty(3)
         _check(lib().bingham_ahrs_gyro_bias(self._h(), _ptr(out)))
+        return out
+
+    def gyro_bias_covariance(self) -> Array:
+        """The covariance of the gyroscope bias estimate ((rad/s)², sensor frame) as a 3×3
+        array, symmetric positive semi-definite: ``bias_std²·I`` on creation, then shrinking
+        as motion and rests teach the bias."""
+        out = np.empty((3, 3))
+        _check(lib().bingham_ahrs_gyro_bias_covariance(self._h(), _ptr(out)))
         return out
 
     def mag_latency_estimate(self) -> Optional[float]:

@@ -58,9 +58,9 @@ pub unsafe extern "C" fn bingham_ahrs_params_default(
     })
 }
 
-/// Creates an AHRS with the parameters `p` (validated: every field finite, periods, noises and
-/// thresholds > 0, `bias_time` ≥ 0, `sample_time` within 1e-6..1e3 s, the process noise per
-/// step `gyro_noise·sqrt(sample_time)` at least 1e-6 rad).
+/// Creates an AHRS with the parameters `p` (validated: every field finite, periods, noises,
+/// thresholds and `bias_std` > 0, `bias_time` and `gyro_scale_noise` ≥ 0, `sample_time` within
+/// 1e-6..1e3 s, the process noise per step `gyro_noise·sqrt(sample_time)` at least 1e-6 rad).
 ///
 /// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`, `out`), `BINGHAM_ERR_INVALID_ARGUMENT` (a bad
 /// field; the message names it). On error `*out` is not written.
@@ -124,15 +124,21 @@ pub unsafe extern "C" fn bingham_ahrs_clone(
 
 /// Processes one sample.
 ///
-/// - `gyr`: angular rate, rad/s, sensor frame (3 doubles).
-/// - `acc`: specific force, m/s², sensor frame (+g up at rest). Its update is skipped (not an
-///   error) when `|acc| < gravity/4` (free fall); the very first sample must show gravity.
+/// - `gyr`: angular rate, rad/s, sensor frame (3 doubles). Required in every sample: a NaN or
+///   ±Inf entry refuses the sample.
+/// - `acc`: specific force, m/s², sensor frame (+g up at rest). A NaN or ±Inf entry means "no
+///   accelerometer sample" at this time (not an error): the gyroscope and the magnetometer of
+///   the sample are still used. Its update is also skipped (not an error) when
+///   `|acc| < gravity/4` (free fall). The very first sample must have a finite accelerometer
+///   showing gravity (`|acc| >= gravity/4`): it initializes the tilt.
 /// - `mag`: magnetic field, any consistent unit (3 doubles), or `NULL` (6-D filter: no heading
-///   information). A zero field, a field along the vertical or a disturbed field is skipped.
+///   information). A NaN or ±Inf entry means "no magnetometer sample" at this time, as `NULL`
+///   (not an error). A zero field, a field along the vertical or a disturbed field is skipped.
 ///
 /// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `gyr`, `acc`), `BINGHAM_ERR_INVALID_ARGUMENT`
-/// (NaN/Inf in a sample; a first sample without gravity), `BINGHAM_ERR_NOT_CONVERGED` /
-/// `BINGHAM_ERR_NUMERICAL` (internal). On error the AHRS is unchanged: the sample is refused.
+/// (NaN/Inf in `gyr`; a first sample without a finite accelerometer showing gravity),
+/// `BINGHAM_ERR_NOT_CONVERGED` / `BINGHAM_ERR_NUMERICAL` (internal). On error the AHRS is
+/// unchanged: the sample is refused.
 ///
 /// # Safety
 /// `a`: a live handle; `gyr`, `acc`: 3 readable doubles each; `mag`: `NULL` or 3 readable
@@ -147,8 +153,9 @@ pub unsafe extern "C" fn bingham_ahrs_update(
     guard("bingham_ahrs_update", || {
         // SAFETY: caller contract.
         let ahrs = unsafe { handle_mut("a", a)? };
-        // SAFETY: caller contract; 3 doubles each.
-        let (g, ac, m) = unsafe { args!(gyr: [3], acc: [3], mag: opt [3]).read()? };
+        // SAFETY: caller contract; 3 doubles each. A non-finite `gyr` is refused here; NaN/Inf
+        // in `acc` or `mag` means "no sample" of that sensor (the core decides).
+        let (g, ac, m) = unsafe { args!(gyr: [3], acc: raw [3], mag: opt raw [3]).read()? };
         let m = m.map(vec3);
         ahrs.inner.update(&vec3(g), &vec3(ac), m.as_ref())?;
         Ok(())
@@ -165,9 +172,16 @@ fn vec3(s: &[f64]) -> [f64; 3] {
 /// - `gyr`, `acc`: n×3 row-major; `mag`: n×3 row-major or `NULL`.
 /// - `quat`: n×4 row-major output (w, x, y, z per row, sensor → world ENU, w ≥ 0).
 ///
-/// A refused sample (see `bingham_ahrs_update()`) stops the batch: the samples before it are
-/// processed and their rows of `quat` written, the rest untouched; the error message names the
-/// sample's index ("sample k: ..."). `n = 0` does nothing.
+/// Per channel, as in `bingham_ahrs_update()`: a row of `acc` or `mag` holding NaN (or ±Inf)
+/// means "no sample" of that sensor at that time, so sensors sampled at lower rates than the
+/// gyroscope, or with gaps, fit in one batch (fill their missing rows with NaN); every row of
+/// `gyr` must be finite.
+///
+/// A refused sample (see `bingham_ahrs_update()`: NaN/Inf in its `gyr` row, or a first sample
+/// without a finite accelerometer showing gravity) stops the batch: the samples before it are
+/// processed and their rows of `quat` written, the refused one changes nothing, the rest are
+/// untouched; the error message names the sample's index ("sample k: ..."). `n = 0` does
+/// nothing.
 ///
 /// Errors: `BINGHAM_ERR_NULL_ARGUMENT`, `BINGHAM_ERR_INVALID_DIMENSION` (n×4 overflows),
 /// those of `bingham_ahrs_update()`.
@@ -380,6 +394,35 @@ pub unsafe extern "C" fn bingham_ahrs_gyro_bias(
         unsafe {
             getter(a, args!(bias: out [3]), |ahrs, v| {
                 v.copy_from_slice(&ahrs.gyro_bias());
+                Ok(())
+            })
+        }
+    })
+}
+
+/// The covariance of the gyroscope bias estimate, in (rad/s)², sensor frame: a 3×3 matrix
+/// written row-major into `cov` (9 doubles; `cov[3*i + j]` is the covariance of the bias
+/// components i and j), symmetric positive semi-definite. The square roots of its diagonal
+/// are the standard deviations (rad/s) of the components of `bingham_ahrs_gyro_bias()`.
+///
+/// It is `bias_std²·I` (see `bingham_ahrs_params`) on creation and until the first sample has
+/// been processed; then it shrinks as the corrections during motion and the rests teach the
+/// bias, and grows by `bias_std²/bias_time` per second (not at all with `bias_time = 0`).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `cov`). On error nothing is written.
+///
+/// # Safety
+/// `a`: a live handle; `cov`: 9 writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_gyro_bias_covariance(
+    a: *const bingham_ahrs,
+    cov: *mut f64,
+) -> bingham_status {
+    guard("bingham_ahrs_gyro_bias_covariance", || {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            getter(a, args!(cov: out [9]), |ahrs, v| {
+                v.copy_from_slice(&ahrs.gyro_bias_covariance());
                 Ok(())
             })
         }

@@ -24,6 +24,7 @@ use crate::distribution::Bingham;
 /// | item | phase 1 checks | phase 2 reads | value |
 /// |---|---|---|---|
 /// | `x: [len]` | `x` | `len` finite doubles | `&[f64]` |
+/// | `x: raw [len]` | `x` | `len` doubles, unchecked (NaN/Inf allowed) | `&[f64]` |
 /// | `(m, z): bingham [d]` | `m`, `z` | d*d and d finite doubles, a valid `Bingham` | `Bingham` |
 /// | `x: rows [n; K]` | `x` | n rows of K doubles, unchecked; n*K overflow refused | `&[[f64;K]]` |
 /// | `x: out [len]` | `x` | – | [`Output`] (`len` doubles) |
@@ -61,6 +62,9 @@ macro_rules! args {
     };
     (@one $n:ident, [$len:expr]) => {
         $crate::ffi::args::ArrayIn::new(stringify!($n), $n, $len)
+    };
+    (@one $n:ident, raw [$len:expr]) => {
+        $crate::ffi::args::ArrayIn::raw(stringify!($n), $n, $len)
     };
     (@one ($m:ident, $z:ident), bingham [$d:expr]) => {
         $crate::ffi::args::BinghamIn::new($d, stringify!($m), $m, stringify!($z), $z)
@@ -165,11 +169,13 @@ impl<A: Arg> Arg for Opt<A> {
     }
 }
 
-/// `name: [len]`: an input array of finite doubles.
+/// `name: [len]`: an input array of finite doubles; `name: raw [len]`: of any doubles (a
+/// sensor sample whose NaN means "no sample").
 pub(crate) struct ArrayIn<'a> {
     name: &'static str,
     p: *const f64,
     len: usize,
+    finite: bool,
     _data: PhantomData<&'a [f64]>,
 }
 
@@ -179,7 +185,15 @@ impl ArrayIn<'_> {
             name,
             p,
             len,
+            finite: true,
             _data: PhantomData,
+        }
+    }
+
+    pub(crate) fn raw(name: &'static str, p: *const f64, len: usize) -> Self {
+        ArrayIn {
+            finite: false,
+            ..ArrayIn::new(name, p, len)
         }
     }
 }
@@ -193,7 +207,13 @@ impl<'a> Arg for ArrayIn<'a> {
 
     unsafe fn take(self) -> FfiResult<&'a [f64]> {
         // SAFETY: forwarded contract (`len` readable doubles).
-        unsafe { read(self.name, self.p, self.len) }
+        unsafe {
+            if self.finite {
+                read(self.name, self.p, self.len)
+            } else {
+                read_raw(self.name, self.p, self.len)
+            }
+        }
     }
 }
 
@@ -659,6 +679,21 @@ mod tests {
             .unwrap();
         assert_eq!(e.status, BINGHAM_ERR_INVALID_ARGUMENT);
         assert!(e.message.starts_with("(`bp`, `zp`): "), "{}", e.message);
+    }
+
+    #[test]
+    fn raw_arrays_take_any_values() {
+        let v = [1.0, f64::NAN, f64::INFINITY];
+        let (vp, nul) = (v.as_ptr(), std::ptr::null::<f64>());
+        // SAFETY: `vp` has 3 readable doubles; NULL is refused before any read.
+        let (r, o) = unsafe { args!(vp: raw [3], nul: opt raw [3]).read() }.unwrap();
+        assert_eq!(r.len(), 3);
+        assert!(r[1].is_nan() && r[2] == f64::INFINITY && o.is_none());
+        // SAFETY: as above.
+        let e = unsafe { args!(vp: raw [3], nul: raw [3]).read() }
+            .err()
+            .unwrap();
+        assert_eq!(e.message, "`nul` is NULL");
     }
 
     #[test]
