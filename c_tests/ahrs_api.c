@@ -11,17 +11,26 @@
  *   status;
  * - after every failure: outputs byte-for-byte unchanged (sentinel fill), filter / AHRS state
  *   identical (quaternion, M, z, bias, spread);
- * - the AHRS: NaN samples refused, a first sample without gravity refused, params with
- *   sample_time 0/NaN refused, a batch stopping at a NaN in sample 5 of 10 (message "sample 5",
- *   rows 0..4 written and equal to single updates, rows 5..9 untouched), mag = NULL accepted,
- *   bingham_ahrs_free(NULL), clones evolving identically;
+ * - the AHRS: NaN/Inf gyroscope samples refused (state unchanged), NaN/Inf accelerometer and
+ *   magnetometer samples accepted as "no sample" of that sensor (a NaN field the same as
+ *   mag = NULL, bit for bit), a first sample without a finite accelerometer showing gravity
+ *   refused, params with sample_time 0/NaN refused, a batch stopping at a NaN gyroscope entry
+ *   in sample 5 of 10 (message "sample 5", rows 0..4 written and equal to single updates, rows
+ *   5..9 untouched) and running through NaN accelerometer / magnetometer rows (equal to single
+ *   updates), a batch whose first sample has a NaN accelerometer refused at "sample 0",
+ *   mag = NULL accepted, bingham_ahrs_free(NULL), clones evolving identically;
+ * - the gyroscope bias's uncertainty: the defaults bias_std = 0.5 deg/s and
+ *   gyro_scale_noise >= 0; bias_std NaN/negative/0 and gyro_scale_noise NaN/negative refused by
+ *   bingham_ahrs_new with a message naming the field; bingham_ahrs_gyro_bias_covariance: NULLs
+ *   (output untouched), bias_std^2 I on creation, after 30 s of a turning stream symmetric with
+ *   a positive diagonal below bias_std^2;
  * - the latencies: default 0, out-of-range / NaN mag_latency and acc_latency refused with a
  *   message naming the field; bingham_ahrs_mag_latency_estimate: NULLs, NOT_CONVERGED (output
  *   untouched) before informative motion, then the delay of a noise-free simulated spin with a
  *   changing rate and the magnetometer two samples late.
  *
  * bingham_ahrs_params is filled with bingham_ahrs_params_default() only (its fields may change);
- * only sample_time and the latencies are set by hand.
+ * only sample_time, the latencies, bias_std and gyro_scale_noise are set by hand.
  */
 #define _DEFAULT_SOURCE 1
 #include <stdint.h>
@@ -345,7 +354,7 @@ static void test_filter_vector(void) {
 /* ---- the AHRS ------------------------------------------------------------------------------- */
 
 typedef struct {
-    double q[4], m[16], z[4], bias[3], spread[4];
+    double q[4], m[16], z[4], bias[3], spread[4], cov[9];
 } astate;
 
 static astate asnap(const bingham_ahrs *a) {
@@ -355,6 +364,7 @@ static astate asnap(const bingham_ahrs *a) {
     CHECK_OK(bingham_ahrs_state(a, s.m, s.z));
     CHECK_OK(bingham_ahrs_gyro_bias(a, s.bias));
     CHECK_OK(bingham_ahrs_angular_spread(a, s.spread));
+    CHECK_OK(bingham_ahrs_gyro_bias_covariance(a, s.cov));
     return s;
 }
 
@@ -431,6 +441,15 @@ static void test_ahrs_update(void) {
     CHECK_STATUS(bingham_ahrs_update(a, g, zero, mag), BINGHAM_ERR_INVALID_ARGUMENT);
     check_msg(fn, NULL);
     CHECK(same_state(s0, asnap(a)));
+    /* so is a first sample without an accelerometer (NaN / Inf): there is no tilt to start from */
+    for (int i = 0; i < 3; ++i) {
+        double aa[3];
+        memcpy(aa, acc, sizeof aa);
+        aa[i] = i == 1 ? INFINITY : NAN;
+        CHECK_STATUS(bingham_ahrs_update(a, g, aa, mag), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg(fn, "first sample");
+        CHECK(same_state(s0, asnap(a)));
+    }
     for (int k = 0; k < 50; ++k) {
         sample(k, g, acc, mag);
         CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
@@ -446,19 +465,40 @@ static void test_ahrs_update(void) {
     CHECK_STATUS(bingham_ahrs_update(a, g, NULL, mag), BINGHAM_ERR_NULL_ARGUMENT);
     check_null_msg(fn, "acc");
     CHECK(same_state(s, asnap(a)));
-    /* NaN / Inf in every entry of every sample vector: refused, AHRS unchanged */
+    /* NaN / Inf in every entry of the gyroscope sample: refused, AHRS unchanged */
     const double bad[3] = {NAN, INFINITY, -INFINITY};
-    const char *names[3] = {"gyr", "acc", "mag"};
-    for (int which = 0; which < 3; ++which)
+    for (int i = 0; i < 3; ++i)
+        for (int v = 0; v < 3; ++v) {
+            double gg[3], aa[3], mm[3];
+            sample(50, gg, aa, mm);
+            gg[i] = bad[v];
+            CHECK_STATUS(bingham_ahrs_update(a, gg, aa, mm), BINGHAM_ERR_INVALID_ARGUMENT);
+            check_msg(fn, "gyr");
+            CHECK(same_state(s, asnap(a)));
+        }
+    /* NaN / Inf in an accelerometer or magnetometer entry: "no sample" of that sensor, accepted
+     * (on clones); a non-finite field is the same as mag = NULL, bit for bit */
+    for (int which = 1; which < 3; ++which)
         for (int i = 0; i < 3; ++i)
             for (int v = 0; v < 3; ++v) {
                 double gg[3], aa[3], mm[3];
                 sample(50, gg, aa, mm);
-                (which == 0 ? gg : which == 1 ? aa : mm)[i] = bad[v];
-                CHECK_STATUS(bingham_ahrs_update(a, gg, aa, mm), BINGHAM_ERR_INVALID_ARGUMENT);
-                check_msg(fn, names[which]);
-                CHECK(same_state(s, asnap(a)));
+                (which == 1 ? aa : mm)[i] = bad[v];
+                bingham_ahrs *c1 = NULL, *c2 = NULL;
+                CHECK_OK(bingham_ahrs_clone(a, &c1));
+                CHECK_OK(bingham_ahrs_clone(a, &c2));
+                if (!c1 || !c2) return;
+                CHECK_OK(bingham_ahrs_update(c1, gg, aa, mm));
+                astate t = asnap(c1);
+                CHECK(all_finite(t.q, 4) && all_finite(t.m, 16) && all_finite(t.z, 4) && all_finite(t.cov, 9));
+                if (which == 2) {
+                    CHECK_OK(bingham_ahrs_update(c2, gg, aa, NULL));
+                    CHECK(same_state(t, asnap(c2)));
+                }
+                bingham_ahrs_free(c1);
+                bingham_ahrs_free(c2);
             }
+    CHECK(same_state(s, asnap(a)));
     /* mag = NULL accepted; a zero field, free fall and a huge sample are not errors */
     sample(50, g, acc, mag);
     CHECK_OK(bingham_ahrs_update(a, g, acc, NULL));
@@ -490,6 +530,10 @@ static void test_ahrs_update(void) {
     check_null_msg("bingham_ahrs_gyro_bias", "a");
     CHECK_STATUS(bingham_ahrs_gyro_bias(a, NULL), BINGHAM_ERR_NULL_ARGUMENT);
     check_null_msg("bingham_ahrs_gyro_bias", "bias");
+    CHECK_STATUS(bingham_ahrs_gyro_bias_covariance(NULL, buf), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_gyro_bias_covariance", "a");
+    CHECK_STATUS(bingham_ahrs_gyro_bias_covariance(a, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_gyro_bias_covariance", "cov");
     CHECK(untouched(buf, sizeof buf));
     /* set_state: NULLs, NaN and a non-orthogonal M refused with the AHRS unchanged; a valid
      * state is taken (its mode becomes the estimate) */
@@ -556,6 +600,8 @@ static void test_ahrs_batch(void) {
             const char *fn = fns[variant];
             bingham_ahrs *a = new_ahrs(0.01), *ref = new_ahrs(0.01);
             if (!a || !ref) return;
+            /* a NaN in sample 5: in the gyroscope row it stops the batch there; in the
+             * accelerometer or magnetometer row it means "no sample" of that sensor */
             double *arr = which == 0 ? g : which == 1 ? acc : mag;
             double saved = arr[3 * 5 + 1];
             arr[3 * 5 + 1] = NAN;
@@ -563,11 +609,16 @@ static void test_ahrs_batch(void) {
             fill(spread, sizeof spread);
             int st = variant ? (int)bingham_ahrs_update_batch_spread(a, N, g, acc, mag, quat, spread)
                              : (int)bingham_ahrs_update_batch(a, N, g, acc, mag, quat);
-            CHECK_STATUS(st, BINGHAM_ERR_INVALID_ARGUMENT);
-            check_msg(fn, "sample 5");
-            arr[3 * 5 + 1] = saved;
-            /* rows 0..4 written, equal to single updates; the rest untouched */
-            for (int k = 0; k < 5; ++k) {
+            const int done = which == 0 ? 5 : N;
+            if (which == 0) {
+                CHECK_STATUS(st, BINGHAM_ERR_INVALID_ARGUMENT);
+                check_msg(fn, "sample 5");
+            } else {
+                CHECK_OK(st);
+            }
+            /* rows 0..done-1 written, equal to single updates (with the same NaN row); the rest
+             * untouched */
+            for (int k = 0; k < done; ++k) {
                 double q[4], sp[4];
                 CHECK_OK(bingham_ahrs_update(ref, g + 3 * k, acc + 3 * k, mag + 3 * k));
                 CHECK_OK(bingham_ahrs_quaternion(ref, q));
@@ -577,13 +628,28 @@ static void test_ahrs_batch(void) {
                     CHECK(spread[k] == sp[3]);
                 }
             }
-            CHECK(untouched(quat + 4 * 5, 4 * (N - 5) * sizeof(double)));
-            CHECK(untouched(variant ? spread + 5 : spread, (variant ? N - 5 : N) * sizeof(double)));
-            /* the AHRS holds the state after sample 4 */
+            arr[3 * 5 + 1] = saved;
+            CHECK(untouched(quat + 4 * done, 4 * (size_t)(N - done) * sizeof(double)));
+            CHECK(untouched(variant ? spread + done : spread, (size_t)(variant ? N - done : N) * sizeof(double)));
+            /* the AHRS holds the state after the last processed sample */
             CHECK(same_state(asnap(a), asnap(ref)));
             bingham_ahrs_free(a);
             bingham_ahrs_free(ref);
         }
+    /* a first sample without an accelerometer: refused at "sample 0", nothing written */
+    {
+        bingham_ahrs *a = new_ahrs(0.01);
+        if (!a) return;
+        astate s0 = asnap(a);
+        double saved = acc[2];
+        acc[2] = NAN;
+        fill(quat, sizeof quat);
+        CHECK_STATUS(bingham_ahrs_update_batch(a, N, g, acc, mag, quat), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg("bingham_ahrs_update_batch", "sample 0");
+        acc[2] = saved;
+        CHECK(untouched(quat, sizeof quat) && same_state(s0, asnap(a)));
+        bingham_ahrs_free(a);
+    }
     /* full batch = single updates; mag and spread NULL accepted */
     for (int use_mag = 0; use_mag < 2; ++use_mag) {
         bingham_ahrs *a = new_ahrs(0.01), *ref = new_ahrs(0.01);
@@ -621,6 +687,103 @@ static void test_ahrs_batch(void) {
         bingham_ahrs_free(a);
         bingham_ahrs_free(ref);
     }
+}
+
+/* ---- the gyroscope bias's uncertainty ------------------------------------------------------------ */
+
+static void test_ahrs_bias_uncertainty(void) {
+    const char *fn = "bingham_ahrs_gyro_bias_covariance";
+    bingham_ahrs_params p, q;
+    CHECK_OK(bingham_ahrs_params_default(0.01, &p));
+    CHECK(fabs(p.bias_std - 0.5 * PI / 180.0) <= 1e-15); /* 0.5 deg/s */
+    CHECK(p.gyro_scale_noise >= 0.0 && isfinite(p.gyro_scale_noise));
+    /* invalid values refused by bingham_ahrs_new, the message naming the field */
+    bingham_ahrs *a = (bingham_ahrs *)no_access_page;
+    const double bad_std[6] = {NAN, -1.0, -1e-300, 0.0, -0.0, INFINITY};
+    for (int k = 0; k < 6; ++k) {
+        q = p;
+        q.bias_std = bad_std[k];
+        CHECK_STATUS(bingham_ahrs_new(&q, &a), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg("bingham_ahrs_new", "bias_std");
+        CHECK(a == (bingham_ahrs *)no_access_page);
+    }
+    const double bad_scale[4] = {NAN, -1.0, -1e-300, INFINITY};
+    for (int k = 0; k < 4; ++k) {
+        q = p;
+        q.gyro_scale_noise = bad_scale[k];
+        CHECK_STATUS(bingham_ahrs_new(&q, &a), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg("bingham_ahrs_new", "gyro_scale_noise");
+        CHECK(a == (bingham_ahrs *)no_access_page);
+    }
+    /* gyro_scale_noise = 0 is valid (no rate-proportional noise) */
+    q = p;
+    q.gyro_scale_noise = 0.0;
+    a = NULL;
+    CHECK_OK(bingham_ahrs_new(&q, &a));
+    bingham_ahrs_free(a);
+
+    /* the covariance: NULLs (output untouched), bias_std^2 I on creation, for the default and
+     * for another bias_std */
+    for (int variant = 0; variant < 2; ++variant) {
+        q = p;
+        if (variant) q.bias_std = 0.02;
+        a = NULL;
+        CHECK_OK(bingham_ahrs_new(&q, &a));
+        if (!a) return;
+        double cov[9];
+        fill(cov, sizeof cov);
+        CHECK_STATUS(bingham_ahrs_gyro_bias_covariance(NULL, cov), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "a");
+        CHECK_STATUS(bingham_ahrs_gyro_bias_covariance(a, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "cov");
+        CHECK(untouched(cov, sizeof cov));
+        CHECK_OK(bingham_ahrs_gyro_bias_covariance(a, cov));
+        for (int i = 0; i < 9; ++i) CHECK(cov[i] == (i % 4 == 0 ? q.bias_std * q.bias_std : 0.0));
+        bingham_ahrs_free(a);
+    }
+
+    /* after 30 s of a slow turn about the vertical with gravity and a field: the corrections
+     * have taught the bias: symmetric, positive diagonal below bias_std^2 */
+    a = new_ahrs(0.01);
+    if (!a) return;
+    for (int k = 0; k < 3000; ++k) {
+        double g[3], acc[3], mag[3];
+        sample(k, g, acc, mag);
+        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+    }
+    double cov[9], var0 = p.bias_std * p.bias_std;
+    CHECK_OK(bingham_ahrs_gyro_bias_covariance(a, cov));
+    CHECK(all_finite(cov, 9));
+    for (int i = 0; i < 3; ++i) {
+        if (!(cov[4 * i] > 0.0 && cov[4 * i] < var0))
+            fprintf(stderr, "    cov[%d][%d] = %g, bias_std^2 = %g\n", i, i, cov[4 * i], var0);
+        CHECK(cov[4 * i] > 0.0 && cov[4 * i] < var0);
+        for (int j = 0; j < 3; ++j) CHECK(fabs(cov[3 * i + j] - cov[3 * j + i]) <= 1e-12 * var0);
+    }
+    /* a NaN gyroscope sample in the middle of the stream is refused with the state unchanged;
+     * NaN accelerometer and magnetometer rows are accepted */
+    {
+        double g[3], acc[3], mag[3], q0[4], q1[4];
+        astate s0 = asnap(a);
+        CHECK_OK(bingham_ahrs_quaternion(a, q0));
+        sample(3000, g, acc, mag);
+        g[1] = NAN;
+        CHECK_STATUS(bingham_ahrs_update(a, g, acc, mag), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg("bingham_ahrs_update", "gyr");
+        CHECK_OK(bingham_ahrs_quaternion(a, q1));
+        CHECK(memcmp(q0, q1, sizeof q0) == 0 && same_state(s0, asnap(a)));
+        sample(3000, g, acc, mag);
+        acc[0] = NAN;
+        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+        sample(3001, g, acc, mag);
+        mag[2] = NAN;
+        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+        sample(3002, g, acc, mag);
+        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+        astate s1 = asnap(a);
+        CHECK(all_finite(s1.q, 4) && all_finite(s1.cov, 9));
+    }
+    bingham_ahrs_free(a);
 }
 
 /* ---- the latencies ---------------------------------------------------------------------------- */
@@ -721,6 +884,7 @@ int main(void) {
     test_ahrs_params_and_new();
     test_ahrs_update();
     test_ahrs_batch();
+    test_ahrs_bias_uncertainty();
     test_ahrs_latency();
     return check_summary("ahrs_api");
 }

@@ -11,6 +11,8 @@
 //   Eigen::Quaterniond have w() = the C mode's entry 0, x() = entry 1, ...; a static sensor at
 //   a known orientation q_true (accelerometer R(q_true)^T g, magnetometer R(q_true)^T m, with
 //   R from Eigen) drives the AHRS to q_true (Eigen's angularDistance < 0.5 degrees);
+// - Ahrs::gyro_bias_covariance_matrix(): entry (i, j) is the C call's row-major cov[3 i + j],
+//   symmetric with a positive diagonal; bias_std^2 * I on creation;
 // - M in either storage order: a column-major Matrix4d and a row-major
 //   Matrix<double, 4, 4, RowMajor> with the same entries give the same Distribution (the
 //   row-major std::vector equal to the entries M(i, j)) and the same results; the transpose gives
@@ -230,6 +232,15 @@ static void test_ahrs() {
     if (err_deg >= 0.5) std::fprintf(stderr, "    AHRS error %.3f deg\n", err_deg);
     CHECK(err_deg < 0.5);
     CHECK((a.gyro_bias_vector() - Vector3d(b.gyro_bias()[0], b.gyro_bias()[1], b.gyro_bias()[2])).norm() == 0);
+    // the bias covariance as Eigen::Matrix3d: entry (i, j) = the C call's cov[3 i + j]
+    const Eigen::Matrix3d cov = a.gyro_bias_covariance_matrix();
+    double cc[9];
+    CHECK_OK(bingham_ahrs_gyro_bias_covariance(a.get(), cc));
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) CHECK(cov(i, j) == cc[3 * i + j]);
+    CHECK((cov - cov.transpose()).norm() <= 1e-12 * cov.norm() && cov.diagonal().minCoeff() > 0);
+    const double bias_std = bingham::ahrs_default_params(0.01).bias_std;
+    CHECK(bingham::Ahrs(0.01).gyro_bias_covariance_matrix() == Eigen::Matrix3d::Identity() * (bias_std * bias_std));
     CHECK(a.uncertainty() > 0 && a.uncertainty() < 0.1);
 }
 

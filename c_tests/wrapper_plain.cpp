@@ -429,6 +429,16 @@ static void test_ahrs() {
     const auto ab = a.gyro_bias();
     CHECK(std::memcmp(asp.data(), sp, sizeof sp) == 0 && a.uncertainty() == sp[3]);
     CHECK(std::memcmp(ab.data(), bias, sizeof bias) == 0);
+    // the bias covariance: bit for bit the C call's, row-major; bias_std^2 * I on creation
+    double cov[9];
+    CHECK_OK(bingham_ahrs_gyro_bias_covariance(c, cov));
+    const std::array<double, 9> acov = a.gyro_bias_covariance();
+    CHECK(std::memcmp(acov.data(), cov, sizeof cov) == 0);
+    {
+        const std::array<double, 9> c0 = bingham::Ahrs(pw).gyro_bias_covariance();
+        for (std::size_t i = 0; i < 9; ++i)
+            CHECK(c0[i] == (i % 4 == 0 ? pw.bias_std * pw.bias_std : 0.0));
+    }
     // the latency readout: none yet after 51 samples (nullopt for BINGHAM_ERR_NOT_CONVERGED)
     double lat = -1.0;
     CHECK(bingham_ahrs_mag_latency_estimate(c, &lat) == BINGHAM_ERR_NOT_CONVERGED && lat == -1.0);
@@ -485,6 +495,7 @@ static void test_ahrs() {
     bingham::Ahrs moved(std::move(a));
     CHECK(!a && static_cast<bool>(moved) && same(moved.state(), before));
     expect_error([&] { (void)a.quaternion(); }, BINGHAM_ERR_NULL_ARGUMENT, "moved-from AHRS");
+    expect_error([&] { (void)a.gyro_bias_covariance(); }, BINGHAM_ERR_NULL_ARGUMENT, "moved-from AHRS");
     a = std::move(other);
     moved = std::move(a);
     CHECK(!a && static_cast<bool>(moved) && same(moved.state(), before));

@@ -126,7 +126,7 @@ def test_ahrs_refuses_nan_sample_and_batch_names_it():
     assert np.array_equal(s0[0], a.state()[0])
     gyr = np.zeros((10, 3))
     acc = np.tile([0, 0, 9.81], (10, 1))
-    acc[6, 2] = np.inf
+    gyr[6, 2] = np.inf  # (NaN/Inf in acc or mag means "no sample": test_ahrs_channels.py)
     with pytest.raises(bh.BinghamError) as e:
         a.update_batch(gyr, acc)
     assert "sample 6" in e.value.message

@@ -1,12 +1,16 @@
 //! The AHRS: random sample streams.
 //!
-//! One case is an AHRS (sample time and latencies sometimes hostile; valid latencies kept, so the
-//! compensation runs on the hostile samples too) fed a simulated IMU stream through
-//! bingham_ahrs_update and the batch functions, with hostile samples mixed in (NaN/Inf, zero and
-//! huge vectors, subnormals, NULL and misaligned pointers, a NaN in the middle of a batch) and
+//! One case is an AHRS (sample time, latencies, bias_std and gyro_scale_noise sometimes hostile;
+//! valid values kept, so the compensation and the bias's uncertainty run on the hostile samples
+//! too) fed a simulated IMU stream through bingham_ahrs_update and the batch functions, with
+//! hostile samples mixed in (NaN/Inf, zero and huge vectors, subnormals, NULL and misaligned
+//! pointers, a NaN in the middle of a batch) and
 //! bingham_ahrs_set_state calls (valid starts near the truth, any orthogonal M, huge / tiny /
 //! repeated z, z spanning more than a double, non-orthogonal M, NaN/Inf), and a twin that
-//! receives only the calls that were accepted. After every call: a refused call leaves the AHRS
+//! receives only the calls that were accepted. A NaN/Inf gyroscope entry must be refused, a
+//! NaN/Inf accelerometer or magnetometer entry means "no sample" of that sensor and must be
+//! accepted (except the accelerometer of the first sample, refused: no tilt to start from).
+//! After every call: a refused call leaves the AHRS
 //! bit-for-bit unchanged (quaternion, state, bias, spread, and the hidden state, through the
 //! twin) and the message names the function (and for a batch the sample); accepted calls leave a
 //! unit quaternion with w ≥ 0, a valid Bingham state, finite bias and spread; after set_state
@@ -52,9 +56,31 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
     };
     let (mag_latency, acc_latency) = (latency(&mut rng), latency(&mut rng));
     let valid_latency = |v: f64| (0.0..=0.5).contains(&v);
-    // the field the message of bingham_ahrs_new must name (sample_time is checked first)
-    let bad_field = if !valid_dt {
+    // bias_std (rad/s, > 0) and gyro_scale_noise (√s, ≥ 0): hostile, valid, or the default
+    let hostile = [-0.0, -1e-9, -1.0, f64::NAN, f64::INFINITY, -f64::INFINITY];
+    let bias_std = match rng.below(6) {
+        0 => Some(*rng.pick(&[&hostile[..], &[0.0]].concat())),
+        1 => Some(*rng.pick(&[1e-6, 1e-3, 0.05, 1.0])),
+        _ => None,
+    };
+    let gyro_scale_noise = match rng.below(6) {
+        0 => Some(*rng.pick(&hostile[1..])),
+        1 => Some(*rng.pick(&[0.0, -0.0, 1e-6, 0.1, 1.0])),
+        _ => None,
+    };
+    let valid_bias_std = bias_std.is_none_or(|v| v.is_finite() && v > 0.0);
+    let valid_scale = gyro_scale_noise.is_none_or(|v| v.is_finite() && v >= 0.0);
+    // the field the message of bingham_ahrs_new must name, in the order of the validation: the
+    // fields that must be > 0 (sample_time first, bias_std last), then sample_time's range,
+    // gyro_scale_noise, the latencies
+    let bad_field = if !(dt.is_finite() && dt > 0.0) {
         Some("sample_time")
+    } else if !valid_bias_std {
+        Some("bias_std")
+    } else if !valid_dt {
+        Some("sample_time")
+    } else if !valid_scale {
+        Some("gyro_scale_noise")
     } else if !valid_latency(mag_latency) {
         Some("mag_latency")
     } else if !valid_latency(acc_latency) {
@@ -101,6 +127,12 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
     }
     p.mag_latency = mag_latency;
     p.acc_latency = acc_latency;
+    if let Some(v) = bias_std {
+        p.bias_std = v;
+    }
+    if let Some(v) = gyro_scale_noise {
+        p.gyro_scale_noise = v;
+    }
     let mut out = [ahrs_sentinel()];
     let null_attack = rng.chance(0.05);
     prime_last_error("bingham_ahrs_new");
@@ -125,8 +157,8 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
     };
     if st != want {
         return Err(format!(
-            "bingham_ahrs_new (sample_time {dt:e}, latencies {mag_latency:e} {acc_latency:e}): \
-             {} instead of {} ({})",
+            "bingham_ahrs_new (sample_time {dt:e}, latencies {mag_latency:e} {acc_latency:e}, \
+             bias_std {bias_std:?}, gyro_scale_noise {gyro_scale_noise:?}): {} instead of {} ({})",
             status_name(st),
             status_name(want),
             last_error()
@@ -157,8 +189,8 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
     let dt = p.sample_time;
     if verbose {
         eprintln!(
-            "sample_time {dt:e}, latencies {:e} {:e}",
-            p.mag_latency, p.acc_latency
+            "sample_time {dt:e}, latencies {:e} {:e}, bias_std {:e}, gyro_scale_noise {:e}",
+            p.mag_latency, p.acc_latency, p.bias_std, p.gyro_scale_noise
         );
     }
     let mut imu = Imu {
@@ -174,6 +206,8 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
     };
     let use_mag = rng.chance(0.8);
     let steps = 5 + rng.below(40);
+    // whether a sample has been accepted (the first one must have a finite accelerometer)
+    let mut initialized = false;
     let mut result = Ok(());
     for step in 0..steps {
         let before = match ahrs_bits(a) {
@@ -188,14 +222,18 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
             if r < 6 {
                 // --- one sample
                 let mut s = imu.sample(&mut rng, dt);
-                let (mut refuse, mut desc) = (false, String::new());
+                let (mut non_finite_in, mut desc) = (None, String::new());
                 if rng.chance(0.25) {
-                    (refuse, desc) = spoil_sample(&mut rng, &mut s);
+                    (non_finite_in, desc) = spoil_sample(&mut rng, &mut s);
                 }
                 let mag_null = !use_mag || rng.chance(0.1);
-                if refuse && mag_null && desc.starts_with("sample[2]") {
-                    refuse = false; // the spoiled magnetometer is not passed
-                }
+                // NaN/Inf: the gyroscope's refuses the sample, the accelerometer's only the first
+                // one, the magnetometer's never ("no sample" of that sensor)
+                let refuse = match non_finite_in {
+                    Some(0) => true,
+                    Some(1) => !initialized,
+                    _ => false,
+                };
                 let mut bufs: Vec<Buf> = s.iter().map(|v| Buf::from(v)).collect();
                 let mut ptr: Vec<*mut f64> = bufs.iter_mut().map(|b| b.ptr()).collect();
                 if mag_null {
@@ -241,7 +279,10 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                             status_name(st)
                         ));
                     }
-                    if !refuse && !null && desc.is_empty() && valid_dt && dt <= 0.1 {
+                    // a sample whose accelerometer or magnetometer is missing (NaN) is as
+                    // clean as any once the AHRS has started
+                    let clean = desc.is_empty() || (non_finite_in.is_some() && initialized);
+                    if !refuse && !null && clean && valid_dt && dt <= 0.1 {
                         return Err(format!("a clean sample refused: {}", last_error()));
                     }
                     return Ok(());
@@ -250,6 +291,7 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                 if st2 != BINGHAM_OK {
                     return Err(format!("twin refused an accepted sample: {}", last_error()));
                 }
+                initialized = true;
                 ahrs_bits(a)?;
             } else if r < 8 {
                 // --- a batch, possibly with a non-finite entry at sample k
@@ -264,14 +306,23 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                     mg[3 * k..3 * k + 3].copy_from_slice(&s[2]);
                 }
                 let mag_null = !use_mag;
-                let bad = (n > 0 && rng.chance(0.4)).then(|| rng.below(n));
-                if let Some(k) = bad {
-                    let arr = match rng.below(if mag_null { 2 } else { 3 }) {
+                // (sample, 0 gyroscope / 1 accelerometer / 2 magnetometer) with a NaN/Inf entry
+                let spoiled = (n > 0 && rng.chance(0.4))
+                    .then(|| (rng.below(n), rng.below(if mag_null { 2 } else { 3 })));
+                // the sample that must stop the batch: a non-finite gyroscope entry, or a
+                // non-finite accelerometer entry in the first sample of an AHRS not yet started;
+                // NaN/Inf elsewhere in the accelerometer or magnetometer rows means "no sample"
+                let mut bad = None;
+                if let Some((k, which)) = spoiled {
+                    let arr = match which {
                         0 => &mut g,
                         1 => &mut ac,
                         _ => &mut mg,
                     };
                     arr[3 * k + rng.below(3)] = non_finite(&mut rng);
+                    if which == 0 || (which == 1 && k == 0 && !initialized) {
+                        bad = Some(k);
+                    }
                 }
                 let with_spread = rng.chance(0.5);
                 let spread_null = with_spread && rng.chance(0.3);
@@ -304,7 +355,7 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                 calls += 1;
                 if verbose {
                     eprintln!(
-                        "step {step}: {name} n = {n}, bad {bad:?} -> {}",
+                        "step {step}: {name} n = {n}, spoiled {spoiled:?}, bad {bad:?} -> {}",
                         status_name(st)
                     );
                 }
@@ -333,6 +384,13 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                     if bad.is_some_and(|b| b != k) || k >= n {
                         return Err(format!(
                             "stopped at sample {k}, the bad one is {bad:?}: {msg}"
+                        ));
+                    }
+                    // only the bad sample may stop a batch of simulated samples (a missing
+                    // accelerometer or magnetometer does not)
+                    if bad.is_none() && valid_dt && dt <= 0.1 {
+                        return Err(format!(
+                            "a batch stopped at sample {k} (spoiled {spoiled:?}): {msg}"
                         ));
                     }
                     k
@@ -389,9 +447,10 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                 if done == 0 && ahrs_bits(a)? != before {
                     return Err("a batch refused at sample 0 changed the AHRS".into());
                 }
+                initialized |= done > 0;
             } else if r < 9 {
                 // --- getters with NULL / misaligned arguments
-                let which = rng.below(5);
+                let which = rng.below(6);
                 let null_handle = rng.chance(0.5);
                 let mut buf = Buf::sentinel(16);
                 let mut buf2 = Buf::sentinel(4);
@@ -413,6 +472,10 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                         1 => ("bingham_ahrs_state", bingham_ahrs_state(ap, o1, o2)),
                         2 => ("bingham_ahrs_gyro_bias", bingham_ahrs_gyro_bias(ap, o1)),
                         3 => (
+                            "bingham_ahrs_gyro_bias_covariance",
+                            bingham_ahrs_gyro_bias_covariance(ap, o1),
+                        ),
+                        4 => (
                             "bingham_ahrs_mag_latency_estimate",
                             bingham_ahrs_mag_latency_estimate(ap, o1),
                         ),

@@ -19,17 +19,20 @@ pub(crate) fn ahrs_sentinel() -> *mut bingham_ahrs {
     0xDEAD_BEE0usize as *mut bingham_ahrs
 }
 
-/// Everything the getters show, as bits: q (4), M (16), z (4), bias (3), spread (4), and the
+/// Everything the getters show, as bits: q (4), M (16), z (4), bias (3), spread (4), the bias
+/// covariance (9: finite, symmetric to 1e-12 of its largest variance, diagonal ≥ 0), and the
 /// magnetometer latency estimate (status, value: OK with a finite value ≥ 0, or NOT_CONVERGED
 /// with the output untouched).
 pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
     let (mut q, mut m, mut z, mut b, mut s) = ([0.0; 4], [0.0; 16], [0.0; 4], [0.0; 3], [0.0; 4]);
+    let mut c = [0.0; 9];
     // SAFETY: a is live; buffers of the documented lengths.
     let sts = unsafe {
         [
             bingham_ahrs_quaternion(a, q.as_mut_ptr()),
             bingham_ahrs_state(a, m.as_mut_ptr(), z.as_mut_ptr()),
             bingham_ahrs_gyro_bias(a, b.as_mut_ptr()),
+            bingham_ahrs_gyro_bias_covariance(a, c.as_mut_ptr()),
         ]
     };
     if sts.iter().any(|&st| st != BINGHAM_OK) {
@@ -66,11 +69,20 @@ pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
     {
         return Err(format!("bias {b:?} / spread {s:?}"));
     }
+    let scale = (0..3).map(|i| c[4 * i]).fold(0.0, f64::max);
+    let asymmetric =
+        (0..3).any(|i| (0..3).any(|j| (c[3 * i + j] - c[3 * j + i]).abs() > 1e-12 * scale));
+    if c.iter().any(|v| !v.is_finite()) || (0..3).any(|i| c[4 * i] < 0.0) || asymmetric {
+        return Err(format!(
+            "bias covariance {c:?} (scale {scale:e}): not finite, symmetric, diagonal ≥ 0"
+        ));
+    }
     Ok(q.iter()
         .chain(&m)
         .chain(&z)
         .chain(&b)
         .chain(&s)
+        .chain(&c)
         .chain(&l)
         .map(|v| v.to_bits())
         .chain([st as u64])
@@ -115,24 +127,26 @@ impl Imu {
     }
 }
 
-/// Spoils one entry or vector of a sample; returns whether it is non-finite (must be refused).
-pub(crate) fn spoil_sample(rng: &mut Rng64, s: &mut [[f64; 3]; 3]) -> (bool, String) {
+/// Spoils one entry or vector of a sample (0 gyroscope, 1 accelerometer, 2 magnetometer);
+/// returns the vector made non-finite, if any (the gyroscope's must be refused; the others mean
+/// "no sample" of that sensor, except the accelerometer of the first sample).
+pub(crate) fn spoil_sample(rng: &mut Rng64, s: &mut [[f64; 3]; 3]) -> (Option<usize>, String) {
     let v = rng.below(3);
     match rng.below(4) {
         0 | 1 => {
             let i = rng.below(3);
             s[v][i] = non_finite(rng);
-            (true, format!("sample[{v}][{i}] = {}", s[v][i]))
+            (Some(v), format!("sample[{v}][{i}] = {}", s[v][i]))
         }
         2 => {
             let i = rng.below(3);
             s[v][i] = extreme(rng);
-            (false, format!("sample[{v}][{i}] = {:e}", s[v][i]))
+            (None, format!("sample[{v}][{i}] = {:e}", s[v][i]))
         }
         _ => {
             let f = *rng.pick(&[0.0, 1e-300, 5e-324, 1e154, 1e300, f64::MAX, -1.0]);
             s[v].iter_mut().for_each(|x| *x *= f);
-            (false, format!("sample[{v}] *= {f:e}"))
+            (None, format!("sample[{v}] *= {f:e}"))
         }
     }
 }
