@@ -808,7 +808,8 @@ static void test_ahrs_latency(void) {
     const char *fn = "bingham_ahrs_mag_latency_estimate";
     bingham_ahrs_params p, q;
     CHECK_OK(bingham_ahrs_params_default(0.01, &p));
-    CHECK(p.mag_latency == 0.0 && p.acc_latency == 0.0); /* default: no compensation */
+    /* default: the magnetometer's online estimate compensated, no accelerometer latency */
+    CHECK(p.mag_latency == BINGHAM_AHRS_LATENCY_ESTIMATE && p.acc_latency == 0.0);
     const double bad[5] = {-1e-9, BINGHAM_AHRS_MAX_LATENCY * 1.000001, 11.0, NAN, INFINITY};
     bingham_ahrs *a = (bingham_ahrs *)no_access_page;
     for (int k = 0; k < 5; ++k) {

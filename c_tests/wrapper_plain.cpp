@@ -443,7 +443,7 @@ static void test_ahrs() {
     double lat = -1.0;
     CHECK(bingham_ahrs_mag_latency_estimate(c, &lat) == BINGHAM_ERR_NOT_CONVERGED && lat == -1.0);
     CHECK(!a.mag_latency_estimate().has_value());
-    CHECK(pw.mag_latency == 0.0 && pw.acc_latency == 0.0);
+    CHECK(pw.mag_latency == BINGHAM_AHRS_LATENCY_ESTIMATE && pw.acc_latency == 0.0);
 
     // a refused sample throws and leaves the AHRS unchanged
     const bingham::Distribution before = a.state();

@@ -28,6 +28,8 @@ pub(super) struct Coeffs {
     pub(super) rest_bias: f64,
     pub(super) mag_ref: f64,
     pub(super) candidate: f64,
+    /// The low-pass coefficient of the norm and dip the disturbance test sees.
+    pub(super) mag_test: f64,
     pub(super) acc: [f64; 5],
     pub(super) mag: [f64; 5],
     /// Warm-up lengths (samples) of the accelerometer's and magnetometer's low-pass filters.
@@ -37,7 +39,18 @@ pub(super) struct Coeffs {
     /// the factor from a gyroscope increment to the compensating turn.
     pub(super) acc_lead: f64,
     pub(super) mag_lead: f64,
+    /// Samples per correction step (`CORRECTION_PERIOD / sample_time`, rounded, at least 1),
+    /// and the time they span (s).
+    pub(super) correct_every: u32,
+    pub(super) correct_time: f64,
 }
+
+/// The period (s) of the AHRS's correction steps (the Bingham composition with the process
+/// noise accumulated since the last step, and the Bayes update with the accelerometer and
+/// magnetometer evidence accumulated over it). The orientation follows the gyroscope at every
+/// sample; the corrections act on time scales of a second and longer, so 20 ms steps change
+/// them by well under a percent while the cost no longer grows with the sample rate.
+pub const CORRECTION_PERIOD: f64 = 0.02;
 
 impl Coeffs {
     pub(super) fn new(p: &AhrsParams) -> Coeffs {
@@ -47,14 +60,23 @@ impl Coeffs {
             rest_bias: lp_coeff(dt, p.rest_bias_time),
             mag_ref: lp_coeff(dt, p.mag_ref_time),
             candidate: lp_coeff(dt, CANDIDATE_TIME),
+            mag_test: lp_coeff(dt, super::magnetic::TEST_TIME),
             acc: butterworth(dt, p.acc_tau),
             mag: butterworth(dt, p.mag_tau),
             acc_warmup: warmup(dt, p.acc_tau),
             mag_warmup: warmup(dt, p.mag_tau),
             acc_lead: p.acc_latency / dt,
-            mag_lead: p.mag_latency / dt,
+            mag_lead: p.mag_latency.max(0.0) / dt,
+            correct_every: correct_every(dt),
+            correct_time: f64::from(correct_every(dt)) * dt,
         }
     }
+}
+
+fn correct_every(dt: f64) -> u32 {
+    (CORRECTION_PERIOD / dt)
+        .round()
+        .clamp(1.0, f64::from(u32::MAX)) as u32
 }
 
 /// Coefficients `(b0, b1, b2, a1, a2)` of a second-order Butterworth low-pass filter with time

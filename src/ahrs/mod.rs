@@ -1,120 +1,111 @@
 //! An attitude and heading reference system (AHRS) on the recursive Bingham filter: gyroscope,
 //! accelerometer and (optionally) magnetometer, every sensor an exact Bayes step on a Bingham
-//! state of the orientation.
+//! state of the orientation, with a Kalman filter of the gyroscope bias coupled to it.
 //!
 //! Conventions: the orientation `q = (w, x, y, z)` (scalar first) maps the sensor frame to the
 //! world frame **ENU** (x east, y magnetic north, z up): `v_world = q ⊗ v_sensor ⊗ q*`.
 //! Units: gyroscope rad/s, accelerometer m/s² (specific force: `+g` up at rest), magnetometer in
 //! any consistent unit.
 //!
-//! # One sample
+//! # One sample (the per-sensor steps)
 //!
-//! 1. **Rest detection and gyroscope bias.** The gyroscope and accelerometer are low-pass
-//!    filtered; while both stay within thresholds of their low-pass values for
-//!    [`AhrsParams::rest_time`], the sensor is at rest and the bias estimate moves toward the
-//!    low-passed rate. During motion the bias follows the corrections the observations make
-//!    (an integral term, time constant [`AhrsParams::bias_time`]), clipped to
-//!    [`AhrsParams::bias_max`].
-//! 2. **Prediction** `q ← q ⊗ Δq ⊗ w`: `Δq` the body-frame increment of the bias-corrected rate
-//!    (exact rotation of the Bingham state), `w` isotropic rotation noise of standard deviation
-//!    `gyro_noise·√dt` ([`crate::observation::noise_from_angle_std`], moment-matched exactly).
-//! 3. **Accelerometer** as a vector observation of "up" ([`crate::observation::davenport_matrix`])
-//!    with `a` the accelerometer low-passed in the gyroscope-integrated (quasi-inertial) frame
-//!    (second-order Butterworth, time constant `acc_tau`; its states are turned with every
-//!    gyroscope increment; it starts as a running mean over its first `acc_tau`): gravity stands
-//!    still there while linear accelerations average out. The likelihood
-//!    `exp(κ upᵀ R(q) a/|a|)` is Bingham in `q`, the update exact, heading untouched.
-//!    `κ = 1/acc_noise²`, reduced when `|a|` departs from `gravity`:
-//!    `κ / (1 + ((|a| − g)/acc_reject)²)`. Samples with `|acc| < gravity/4` (free fall, or no
-//!    accelerometer data) are not fed to the low-pass filter.
-//! 4. **Magnetometer** as a heading observation that cannot tilt the estimate: the field,
-//!    low-passed like the accelerometer (`mag_tau`; disturbed samples are not fed), is
-//!    rotated to the world frame with the current estimate, its horizontal direction gives the
-//!    heading error `δ`, and the likelihood `exp(−2κ e_z²)` with `e = q ⊗ q_m*`,
-//!    `q_m = Rz(δ) ⊗ q̂` (the von Mises density `exp(κ cos ψ)` of the heading error `ψ`, written
-//!    in `q`) is a Bingham density whose only concentrated direction is the rotation about the
-//!    vertical: at the estimate it carries no tilt information at all. `κ = 1/mag_noise²`.
-//!    Magnetic disturbances are rejected: the field's norm and dip angle are tracked; a sample
-//!    whose norm differs from the reference by more than `mag_norm_tol` (relative) or whose dip
-//!    differs by more than `mag_dip_tol` is not used. A disturbance that stays constant for
-//!    `mag_new_time` becomes the new reference.
+//! 1. **Rest and the bias at rest.** The gyroscope and accelerometer are low-pass filtered;
+//!    while both stay within thresholds of their low-pass values for
+//!    [`AhrsParams::rest_time`], the low-passed rate is a direct measurement of the bias
+//!    (a fixed-gain Kalman step, time constant [`AhrsParams::rest_bias_time`]).
+//! 2. **Gyroscope.** The state is turned exactly by the body-frame increment of the
+//!    bias-corrected rate, `q ← q ⊗ Δq`; the process noise of the sample — `gyro_noise²·dt`,
+//!    `(gyro_scale_noise·|ω|)²·dt`, and what the bias's uncertainty adds through its
+//!    coupling (module `bias`) — is accumulated.
+//! 3. **Accelerometer** (skipped for a non-finite sample or `|acc| < gravity/4`): low-passed in
+//!    the gyroscope-integrated frame (second-order Butterworth, `acc_tau`), where gravity
+//!    stands still and linear accelerations average out.
+//! 4. **Magnetometer** (skipped for a missing, zero or non-finite sample): the disturbance
+//!    test, decided per phase with hysteresis, and the field averaged in the world frame of
+//!    the estimate (module `magnetic`).
+//! 5. **Correction**, every [`CORRECTION_PERIOD`] (20 ms; every sample below 50 Hz): the state
+//!    is composed with the accumulated process noise (moment matching), then multiplied by
+//!    the evidence of the period — the tilt likelihood `exp(κ_a upᵀ R(q) ā/|ā|)` and the
+//!    heading likelihood (von Mises in the heading error of the averaged field, no tilt
+//!    information) — in one exact Bayes product. The evidence is per second:
+//!    `κ_a = T/(acc_noise²·acc_tau)` for a period `T` (divided by
+//!    `1 + ((|ā| − g)/acc_reject)²`), `κ_m = T/(mag_noise²·mag_tau)`; the same defaults
+//!    therefore behave the same at 100 Hz and at 1 kHz. The move of the mode then updates
+//!    the bias (module `bias`).
+//!
+//! The state is committed at the end of the sample: a refused sample (non-finite gyroscope, a
+//! numerical failure) leaves the AHRS exactly as it was. No allocation, no copy of the filter.
 //!
 //! # Latency
 //!
 //! With [`AhrsParams::mag_latency`] (or [`AhrsParams::acc_latency`]) `L > 0`, each magnetometer
 //! (accelerometer) sample is first turned forward by the bias-corrected rate of its sample over
-//! the latency, `v ← exp(−[ω]× L) v` (the rotation by the rotation vector `−ω·L`), so that it
-//! shows the field (specific force) at the end of the sample's gyroscope interval; the
-//! disturbance test and the low-pass filters see the turned samples. Default 0: the samples are
-//! used as they are.
-//!
-//! Independently, the AHRS estimates the magnetometer's latency from the raw samples
-//! ([`Ahrs::mag_latency_estimate`]): in a homogeneous field `dm/dt = −ω × m` in the sensor
-//! frame, exactly `m_k − m_{k−s} = −φ × (m_k + m_{k−s})/2` over a span of `s` samples (`φ` the
-//! Cayley vector of the rotation the gyroscope composes over the span); the residual of this
-//! relation with the gyroscope taken `j` samples earlier is smallest at the latency. The
-//! exponentially forgotten mean squares of the residuals for lags `j = 0 … W` (W: 40 ms, at
-//! most 32 samples, at least 2; span `s = W`; pairs weighted by the change of the rate they
-//! see, memory 30 s of informative motion; only undisturbed samples) give the estimate as the
-//! vertex of a parabola through the smallest and its neighbours. Convention: gyroscope sample k
-//! is the rate over (t_{k−1}, t_k], as in the prediction; then the estimate has no half-sample
-//! offset. Fixed-size buffers, no allocation.
+//! the latency, `v ← exp(−[ω]× L) v`, so that it shows the field (specific force) at the end of
+//! the sample's gyroscope interval. The AHRS estimates the magnetometer's latency from the raw
+//! samples ([`Ahrs::mag_latency_estimate`]; the method is in the `latency` module); with
+//! `mag_latency` = [`LATENCY_ESTIMATE`] (the default) it compensates that estimate, from the
+//! moment it exists (after 5 s of informative motion). The mechanism: during sustained
+//! rotation a lag `L` turns the field by `ω·L`, which through the dip becomes a heading error
+//! of about `|ω| L tan(dip)`; real sensors have such offsets between channels (BROAD's
+//! magnetometer lags by about 12 ms), and the estimate measures it from the IMU alone.
+//! `acc_latency` defaults to 0.
 //!
 //! The first sample initializes the state: tilt from the accelerometer, heading from the
 //! magnetometer (without one the heading is uniform: honestly unknown), each with the
 //! concentration of [`AhrsParams::init_std`] — unless a start was given with
 //! [`Ahrs::set_state`].
-//!
-//! Every step is allocation-free; a refused sample leaves the AHRS exactly as it was.
 
-use nalgebra::Matrix4;
+use nalgebra::{Matrix3, Matrix4, Vector3, Vector4};
 
 use crate::error::{Error, Result};
-use crate::filter::{BinghamFilter, Noise};
-use crate::observation::{noise_from_angle_std, observation_exponent};
+use crate::filter::{BinghamFilter, Core};
+use crate::observation::observation_exponent;
 use crate::quaternion::q4;
 
+mod bias;
 mod latency;
 mod lowpass;
+mod magnetic;
 mod params;
 mod vec3;
 
+use bias::{evidence_precision, noise_moment, pinv, precision, rotation_matrix, BiasState};
 use latency::{turn_forward, LatencyEstimator};
-use lowpass::{Coeffs, InertialLowPass};
-pub use params::{AhrsParams, MAX_LATENCY, MAX_SAMPLE_TIME, MIN_SAMPLE_TIME, MIN_STEP_NOISE};
-use vec3::{cross3, dot3, norm3, scale3};
+pub use lowpass::CORRECTION_PERIOD;
+use lowpass::{Coeffs, InertialLowPass, REST_FILTER_TIME};
+use magnetic::{heading_exponent, Magnetic};
+pub use params::{
+    AhrsParams, LATENCY_ESTIMATE, MAX_LATENCY, MAX_SAMPLE_TIME, MIN_SAMPLE_TIME, MIN_STEP_NOISE,
+};
+use vec3::{cross3, norm3, scale3};
+
+/// The largest rotation (rad) one gyroscope sample may turn (`|gyr|·sample_time`): a million
+/// radians, far beyond any sensor, below where the increment's arithmetic loses meaning.
+pub const MAX_TURN: f64 = 1e6;
 
 /// The world's "up" (ENU).
 const UP: [f64; 3] = [0.0, 0.0, 1.0];
 
-fn check_sample(what: &str, v: &[f64; 3]) -> Result<()> {
-    match v.iter().position(|x| !x.is_finite()) {
-        None => Ok(()),
-        Some(i) => Err(Error::InvalidArgument(format!(
-            "`{what}[{i}]` = {} is not finite",
-            v[i]
-        ))),
-    }
+/// Whether a sample is usable: every value finite and its norm representable (a vector of
+/// values near the largest double has an overflowing norm: it counts as no sample).
+fn usable3(v: &[f64; 3]) -> bool {
+    v.iter().all(|x| x.is_finite()) && norm3(v).is_finite()
 }
 
-/// The exponent matrix `−2κ u uᵀ` of the heading likelihood `exp(−2κ e_z²)`, `e = q ⊗ q_m*`:
-/// `e_z = uᵀ q` with `u` the last row of `R(q_m*)` (`x ⊕ y = R(y) x`).
-fn heading_exponent(q_m: &[f64; 4], kappa: f64) -> Matrix4<f64> {
-    let c = q4::conj(q_m);
-    // Row 3 of R(c) (see quaternion::right_matrix): [c3, c2, −c1, c0].
-    let u = [c[3], c[2], -c[1], c[0]];
-    Matrix4::from_fn(|i, j| -2.0 * kappa * u[i] * u[j])
-}
-
-/// Magnetic disturbance tracking (norm and dip of the field).
+/// The state a sample changes besides the Bingham state (small; copied, changed and committed
+/// at the end of the sample).
 #[derive(Debug, Clone, PartialEq)]
-struct MagRef {
-    norm: f64,
-    dip: f64,
-    /// The current candidate for a new reference and how long it has held.
-    cand_norm: f64,
-    cand_dip: f64,
-    cand_time: f64,
+struct SampleState {
+    bias: BiasState,
+    gyr_lp: [f64; 3],
+    acc_lp: [f64; 3],
+    rest_timer: f64,
+    acc_filter: InertialLowPass,
+    mag: Magnetic,
+    /// Samples since the last correction.
+    since: u32,
+    /// `omega(z)` of the Bingham state (cached for the next composition and the spread).
+    omega: [f64; 4],
 }
 
 /// The AHRS. Create it with [`Ahrs::new`], feed it samples with [`Ahrs::update`] (or
@@ -124,16 +115,8 @@ struct MagRef {
 pub struct Ahrs {
     params: AhrsParams,
     coeffs: Coeffs,
-    /// The process noise, prepared once (fixed for the AHRS's life).
-    noise: Noise<4>,
     filter: Option<BinghamFilter>,
-    bias: [f64; 3],
-    gyr_lp: [f64; 3],
-    acc_lp: [f64; 3],
-    rest_timer: f64,
-    mag: Option<MagRef>,
-    acc_filter: InertialLowPass,
-    mag_filter: Option<InertialLowPass>,
+    s: SampleState,
     /// The online estimate of the magnetometer's latency (a readout; not used by the filter).
     latency: LatencyEstimator,
     samples: u64,
@@ -144,21 +127,21 @@ impl Ahrs {
     /// sample. Errors: [`Error::InvalidArgument`] for a bad parameter.
     pub fn new(params: &AhrsParams) -> Result<Ahrs> {
         params.validate()?;
-        let noise = noise_from_angle_std(4, params.gyro_noise * params.sample_time.sqrt())?;
-        let noise = Noise::process(&noise.m_row_major(), noise.z().as_slice())?;
         let coeffs = Coeffs::new(params);
         Ok(Ahrs {
             params: *params,
             coeffs,
-            noise,
             filter: None,
-            bias: [0.0; 3],
-            gyr_lp: [0.0; 3],
-            acc_lp: [0.0; 3],
-            rest_timer: 0.0,
-            mag: None,
-            acc_filter: InertialLowPass::new(coeffs.acc, coeffs.acc_warmup, &[0.0; 3]),
-            mag_filter: None,
+            s: SampleState {
+                bias: BiasState::new(params.bias_std),
+                gyr_lp: [0.0; 3],
+                acc_lp: [0.0; 3],
+                rest_timer: 0.0,
+                acc_filter: InertialLowPass::new(coeffs.acc, coeffs.acc_warmup, &[0.0; 3]),
+                mag: Magnetic::new(),
+                since: 0,
+                omega: [0.25; 4],
+            },
             latency: LatencyEstimator::new(params.sample_time),
             samples: 0,
         })
@@ -195,8 +178,11 @@ impl Ahrs {
         }
     }
 
-    /// The Bingham state `(M row-major 4×4, z)` into the buffers (lengths 16 and 4). Before the
-    /// first sample: the uniform distribution (`M = I`, `z = 0`).
+    /// The Bingham state `(M row-major 4×4, z)` into the buffers (lengths 16 and 4): the state
+    /// of the last correction step, turned by the gyroscope since (the process noise of the
+    /// samples since then, at most [`CORRECTION_PERIOD`], is added at the next correction; the
+    /// spread includes it). Before the first sample: the uniform distribution (`M = I`,
+    /// `z = 0`).
     pub fn state_into(&self, m: &mut [f64], z: &mut [f64]) -> Result<()> {
         match &self.filter {
             Some(f) => f.state_into(m, z),
@@ -224,18 +210,23 @@ impl Ahrs {
     /// self-initialization: the first sample then only primes the low-pass filters.
     ///
     /// Errors: [`Error::InvalidDimension`] (lengths), [`Error::InvalidArgument`] (NaN/Inf, `M`
-    /// not orthogonal); the AHRS is then unchanged.
+    /// not orthogonal), [`Error::Numerical`] (moments of the state not computable); the AHRS
+    /// is then unchanged.
     pub fn set_state(&mut self, m: &[f64], z: &[f64]) -> Result<()> {
-        match self.filter.as_mut() {
-            Some(f) => f.set_state(m, z),
-            None => {
-                self.filter = Some(BinghamFilter::new(4, m, z)?);
-                Ok(())
-            }
+        let mut f = BinghamFilter::new(4, m, z)?;
+        let omega = f.core4_mut()?.omega4()?;
+        if let Some(old) = self.filter.as_mut() {
+            old.set_state(m, z)?;
+        } else {
+            self.filter = Some(f);
         }
+        self.s.omega = [omega[0], omega[1], omega[2], omega[3]];
+        self.s.bias.pending = Matrix3::zeros();
+        Ok(())
     }
 
-    /// The underlying filter (`None` before the first sample).
+    /// The underlying filter (`None` before the first sample); its state as in
+    /// [`Ahrs::state_into`].
     pub fn filter(&self) -> Option<&BinghamFilter> {
         self.filter.as_ref()
     }
@@ -243,20 +234,53 @@ impl Ahrs {
     /// The angular spread of the state (radians, see
     /// [`crate::observation::spread_from_omega`]): `out[0..3]` along the principal directions,
     /// `out[3]` the total (≈ the RMS rotation angle between the truth and the estimate, if the
-    /// state is calibrated). Before the first sample: that of the uniform distribution.
+    /// state is calibrated), including the process noise accumulated since the last
+    /// correction and what the gyroscope bias's uncertainty has added. Before the first
+    /// sample: that of the uniform distribution.
     pub fn angular_spread(&self, out: &mut [f64; 4]) -> Result<()> {
-        match &self.filter {
-            Some(f) => f.angular_spread_into(out),
-            None => {
-                crate::observation::spread_from_omega(&[0.25; 4], out);
-                Ok(())
+        let Some(f) = &self.filter else {
+            crate::observation::spread_from_omega(&[0.25; 4], out);
+            return Ok(());
+        };
+        crate::observation::spread_from_omega(&self.s.omega, out);
+        let n = &self.s.bias.pending;
+        if n.trace() > 0.0 {
+            let core = f.core4()?;
+            let (m, _) = core.params4();
+            let q = core.mode4();
+            let qc = q4::conj(&q);
+            let mut total = out[3] * out[3];
+            for (i, o) in out.iter_mut().take(3).enumerate() {
+                let c = m.column(i);
+                let v = q4::mul(&qc, &[c[0], c[1], c[2], c[3]]);
+                let u = Vector3::new(v[1], v[2], v[3]);
+                let add = (u.transpose() * n * u)[0].max(0.0);
+                *o = (*o * *o + add).sqrt();
+                total += add;
             }
+            out[3] = total.sqrt();
         }
+        Ok(())
     }
 
     /// The gyroscope bias estimate (rad/s, sensor frame).
     pub fn gyro_bias(&self) -> [f64; 3] {
-        self.bias
+        let b = &self.s.bias.b;
+        [b[0], b[1], b[2]]
+    }
+
+    /// The covariance of the gyroscope bias estimate ((rad/s)², 3×3 row-major, sensor frame):
+    /// starts at `bias_std²·I`, shrinks as the corrections (and rests) teach the bias, grows
+    /// by `bias_std²/bias_time` per second.
+    pub fn gyro_bias_covariance(&self) -> [f64; 9] {
+        let p = &self.s.bias.p;
+        let mut out = [0.0; 9];
+        for i in 0..3 {
+            for j in 0..3 {
+                out[3 * i + j] = p[(i, j)];
+            }
+        }
+        out
     }
 
     /// The online estimate of the magnetometer's latency behind the gyroscope (s, within 0 and
@@ -283,208 +307,91 @@ impl Ahrs {
 
     /// Processes one sample: `gyr` (rad/s), `acc` (m/s²), `mag` (any unit, or `None`).
     ///
-    /// Refused (error, nothing changed): NaN/Inf in any value ([`Error::InvalidArgument`]);
-    /// the first sample with `|acc| < gravity/4` (no tilt to start from). Skipped parts (not an
-    /// error): the accelerometer update when `|acc| < gravity/4` (free fall), the magnetometer
-    /// update for a zero field, a field along the vertical, or a disturbed field.
+    /// Per channel: a non-finite (NaN/Inf) accelerometer or magnetometer sample means "no
+    /// sample" for that sensor — the gyroscope increment and the other sensor are still used.
+    /// Refused (error, nothing changed): a non-finite gyroscope sample
+    /// ([`Error::InvalidArgument`]); the first sample without a usable accelerometer
+    /// (non-finite or `|acc| < gravity/4`: no tilt to start from); a numerical failure of a
+    /// correction step ([`Error::Numerical`]). Skipped parts (not an error): the accelerometer
+    /// when `|acc| < gravity/4` (free fall), the magnetometer for a zero field, a field along
+    /// the vertical, or a disturbed field.
     pub fn update(&mut self, gyr: &[f64; 3], acc: &[f64; 3], mag: Option<&[f64; 3]>) -> Result<()> {
-        check_sample("gyr", gyr)?;
-        check_sample("acc", acc)?;
-        if let Some(m) = mag {
-            check_sample("mag", m)?;
+        if let Some(i) = gyr.iter().position(|x| !x.is_finite()) {
+            return Err(Error::InvalidArgument(format!(
+                "`gyr[{i}]` = {} is not finite (the gyroscope is required in every sample)",
+                gyr[i]
+            )));
         }
-        let mag = mag.filter(|m| norm3(m) > 0.0);
+        let turn = norm3(gyr) * self.params.sample_time;
+        if turn.is_nan() || turn > MAX_TURN {
+            return Err(Error::InvalidArgument(format!(
+                "the gyroscope sample turns by |gyr|·sample_time = {turn:e} rad, more than \
+                 {MAX_TURN:e} rad in one sample: not a rotation rate"
+            )));
+        }
+        let acc = usable3(acc).then_some(acc);
+        let mag = mag.filter(|m| usable3(m) && norm3(m) > 0.0);
         if self.samples == 0 {
             return self.initialize(gyr, acc, mag);
         }
-        // Work on a copy of the filter: the state is assigned only when every step succeeded.
-        let mut filter = self.filter.clone().expect("initialized");
-        let f = filter.core4_mut()?;
-        let p = &self.params;
-        let dt = p.sample_time;
-
-        // 1. Rest detection and the bias at rest.
-        let c = &self.coeffs;
-        let mut gyr_lp = self.gyr_lp;
-        let mut acc_lp = self.acc_lp;
-        for i in 0..3 {
-            gyr_lp[i] += c.rest_filter * (gyr[i] - gyr_lp[i]);
-            acc_lp[i] += c.rest_filter * (acc[i] - acc_lp[i]);
+        let core = self
+            .filter
+            .as_mut()
+            .ok_or_else(|| Error::Numerical("AHRS without a state after its first sample".into()))?
+            .core4_mut()?;
+        let saved = core.save4();
+        let mut s = self.s.clone();
+        let mut c = self.coeffs;
+        if self.params.mag_latency == LATENCY_ESTIMATE {
+            c.mag_lead = self.latency.estimate().unwrap_or(0.0) / self.params.sample_time;
         }
-        let dg = norm3(&[gyr[0] - gyr_lp[0], gyr[1] - gyr_lp[1], gyr[2] - gyr_lp[2]]);
-        let da = norm3(&[acc[0] - acc_lp[0], acc[1] - acc_lp[1], acc[2] - acc_lp[2]]);
-        let still = dg < p.rest_gyro && da < p.rest_acc && norm3(&gyr_lp) < 2.0 * p.bias_max;
-        let rest_timer = if still { self.rest_timer + dt } else { 0.0 };
-        let mut bias = self.bias;
-        if rest_timer >= p.rest_time {
-            for i in 0..3 {
-                bias[i] += c.rest_bias * (gyr_lp[i] - bias[i]);
+        match step(&self.params, &c, core, &mut s, gyr, acc, mag) {
+            Ok((dq, mag_used)) => {
+                self.s = s;
+                // the latency estimate works on the raw samples (infallible, after the rest)
+                self.latency.push(&dq, if mag_used { mag } else { None });
+                self.samples += 1;
+                Ok(())
+            }
+            Err(e) => {
+                core.restore4(saved);
+                Err(e)
             }
         }
-
-        // 2. Prediction with the body-frame increment of the bias-corrected rate.
-        let w = [
-            (gyr[0] - bias[0]) * dt,
-            (gyr[1] - bias[1]) * dt,
-            (gyr[2] - bias[2]) * dt,
-        ];
-        let dq = q4::from_rotation_vector(&w);
-        f.predict_prepared(&dq, &self.noise)?;
-        let q_prior = f.mode4();
-        // Latency compensation: each sample turned forward by the rate over its latency.
-        let acc_now = turn_forward(acc, &w, c.acc_lead);
-        let mag_now = mag.map(|m| turn_forward(m, &w, c.mag_lead));
-
-        // 3. Accelerometer: "up" seen in the sensor frame, low-passed in the inertial frame.
-        let mut acc_filter = self.acc_filter.clone();
-        acc_filter.turn(&dq);
-        if norm3(&acc_now) >= 0.25 * p.gravity {
-            acc_filter.step(&acc_now);
-        }
-        let an = norm3(&acc_filter.y);
-        if an >= 0.25 * p.gravity {
-            let excess = (an - p.gravity) / p.acc_reject;
-            let kappa = 1.0 / (p.acc_noise * p.acc_noise) / (1.0 + excess * excess);
-            let b = scale3(&acc_filter.y, 1.0 / an);
-            f.update_precision(&observation_exponent(&b, &UP, kappa))?;
-        }
-
-        // 4. Magnetometer: heading only, with disturbance rejection, low-passed as the
-        // accelerometer (disturbed samples are not fed to the filter).
-        let mut mag_ref = self.mag.clone();
-        let mut mag_filter = self.mag_filter.clone();
-        let mut heading_observed = false;
-        let mut mag_undisturbed = false;
-        if let Some(mf) = mag_filter.as_mut() {
-            mf.turn(&dq);
-        }
-        if let Some(m) = mag_now.as_ref() {
-            let q = f.mode4();
-            if let Some(kappa) = self.magnetic_weight(&q, m, &mut mag_ref) {
-                mag_undisturbed = true;
-                let mf =
-                    mag_filter.get_or_insert_with(|| InertialLowPass::new(c.mag, c.mag_warmup, m));
-                mf.step(m);
-                let mw = q4::rotate(&q, &mf.y);
-                let h = (mw[0] * mw[0] + mw[1] * mw[1]).sqrt();
-                if h > 1e-3 * norm3(&mf.y) {
-                    // δ rotates the horizontal field onto north (Rz(δ) (sin δ, cos δ) = (0, 1)).
-                    let delta = mw[0].atan2(mw[1]);
-                    let rz = [(0.5 * delta).cos(), 0.0, 0.0, (0.5 * delta).sin()];
-                    let q_m = q4::mul(&rz, &q);
-                    f.update_precision(&heading_exponent(&q_m, kappa))?;
-                    heading_observed = true;
-                }
-            }
-        }
-
-        // 5. Bias from the correction during motion (integral feedback).
-        if p.bias_time > 0.0 && rest_timer < p.rest_time {
-            let q_post = f.mode4();
-            let corr = if heading_observed {
-                q4::to_rotation_vector(&q4::mul(&q4::conj(&q_prior), &q_post))
-            } else {
-                // Without a heading observation the mode may slide along the unobserved
-                // rotation about the vertical (nearly equal concentrations): keep only the tilt
-                // correction, which such a slide leaves unchanged (body frame, small angles).
-                let up_prior = q4::rotate_inverse(&q_prior, &UP);
-                let up_post = q4::rotate_inverse(&q_post, &UP);
-                cross3(&up_post, &up_prior)
-            };
-            for i in 0..3 {
-                bias[i] -= corr[i] / p.bias_time;
-            }
-        }
-        for b in bias.iter_mut() {
-            *b = b.clamp(-p.bias_max, p.bias_max);
-        }
-
-        self.filter = Some(filter);
-        self.bias = bias;
-        self.gyr_lp = gyr_lp;
-        self.acc_lp = acc_lp;
-        self.rest_timer = rest_timer;
-        self.mag = mag_ref;
-        self.acc_filter = acc_filter;
-        self.mag_filter = mag_filter;
-        // the latency estimate works on the raw samples (infallible: after every fallible step)
-        self.latency
-            .push(&dq, if mag_undisturbed { mag } else { None });
-        self.samples += 1;
-        Ok(())
-    }
-
-    /// The heading concentration for this magnetometer sample, or `None` when the field is
-    /// disturbed; updates the disturbance tracking in `r`.
-    fn magnetic_weight(&self, q: &[f64; 4], m: &[f64; 3], r: &mut Option<MagRef>) -> Option<f64> {
-        let p = &self.params;
-        let norm = norm3(m);
-        let up_b = q4::rotate_inverse(q, &UP);
-        let dip = (dot3(m, &up_b) / norm).clamp(-1.0, 1.0).asin();
-        let reference = r.get_or_insert(MagRef {
-            norm,
-            dip,
-            cand_norm: norm,
-            cand_dip: dip,
-            cand_time: 0.0,
-        });
-        let dt = p.sample_time;
-        let disturbed = (norm - reference.norm).abs() > p.mag_norm_tol * reference.norm
-            || (dip - reference.dip).abs() > p.mag_dip_tol;
-        if !disturbed {
-            let k = self.coeffs.mag_ref;
-            reference.norm += k * (norm - reference.norm);
-            reference.dip += k * (dip - reference.dip);
-            reference.cand_norm = norm;
-            reference.cand_dip = dip;
-            reference.cand_time = 0.0;
-            return Some(1.0 / (p.mag_noise * p.mag_noise));
-        }
-        // A steady disturbance: follow the candidate; accept it once it has held long enough.
-        let steady = (norm - reference.cand_norm).abs() <= p.mag_norm_tol * reference.cand_norm
-            && (dip - reference.cand_dip).abs() <= p.mag_dip_tol;
-        if steady {
-            let k = self.coeffs.candidate;
-            reference.cand_norm += k * (norm - reference.cand_norm);
-            reference.cand_dip += k * (dip - reference.cand_dip);
-            reference.cand_time += dt;
-            if reference.cand_time >= p.mag_new_time {
-                reference.norm = reference.cand_norm;
-                reference.dip = reference.cand_dip;
-                reference.cand_time = 0.0;
-            }
-        } else {
-            reference.cand_norm = norm;
-            reference.cand_dip = dip;
-            reference.cand_time = 0.0;
-        }
-        None
     }
 
     /// The first sample: tilt from `acc`, heading from `mag` (uniform without it).
-    fn initialize(&mut self, gyr: &[f64; 3], acc: &[f64; 3], mag: Option<&[f64; 3]>) -> Result<()> {
+    fn initialize(
+        &mut self,
+        gyr: &[f64; 3],
+        acc: Option<&[f64; 3]>,
+        mag: Option<&[f64; 3]>,
+    ) -> Result<()> {
         let p = self.params;
-        let acc_raw = acc;
+        let c = self.coeffs;
+        let Some(acc_raw) = acc else {
+            return Err(Error::InvalidArgument(
+                "the first sample must show gravity: its accelerometer sample is not finite; \
+                 the AHRS starts from a sample with a usable accelerometer"
+                    .into(),
+            ));
+        };
         // the latency compensation of `update`, with the rate of this sample
+        let b = self.gyro_bias();
         let w = scale3(
-            &[
-                gyr[0] - self.bias[0],
-                gyr[1] - self.bias[1],
-                gyr[2] - self.bias[2],
-            ],
+            &[gyr[0] - b[0], gyr[1] - b[1], gyr[2] - b[2]],
             p.sample_time,
         );
-        let acc = &turn_forward(acc, &w, self.coeffs.acc_lead);
-        let mag_now = mag.map(|m| turn_forward(m, &w, self.coeffs.mag_lead));
-        let mag = mag_now.as_ref();
-        let an = norm3(acc);
+        let acc = turn_forward(acc_raw, &w, c.acc_lead);
+        let mag = mag.map(|m| turn_forward(m, &w, c.mag_lead));
+        let an = norm3(&acc);
         if an < 0.25 * p.gravity {
             return Err(Error::InvalidArgument(format!(
                 "the first sample must show gravity: |acc| = {an} < gravity/4 (free fall or \
                  no data); the AHRS starts from a sample with a usable accelerometer"
             )));
         }
-        let up_b = scale3(acc, 1.0 / an);
+        let up_b = scale3(&acc, 1.0 / an);
         let kappa = 1.0 / (p.init_std * p.init_std);
         // A state given by `set_state` before the first sample is kept as the start.
         let given = self.filter.is_some();
@@ -498,49 +405,47 @@ impl Ahrs {
                 &[0.0; 4],
             )?,
         };
-        if !given {
-            f.core4_mut()?
-                .update_precision(&observation_exponent(&up_b, &UP, kappa))?;
-        }
-        let mut mag_ref = None;
-        if let Some(m) = mag {
-            let east_b = cross3(m, &up_b);
-            let en = norm3(&east_b);
-            if en > 1e-3 * norm3(m) {
-                let east_b = scale3(&east_b, 1.0 / en);
-                let north_b = cross3(&up_b, &east_b);
-                let q0 = q4::from_matrix(&[east_b, north_b, up_b]);
-                if !given {
-                    f.core4_mut()?
-                        .update_precision(&heading_exponent(&q0, kappa))?;
+        let mut mag_state = Magnetic::new();
+        {
+            let core = f.core4_mut()?;
+            if !given {
+                core.update_precision(&observation_exponent(&up_b, &UP, kappa))?;
+            }
+            if let Some(m) = mag.as_ref() {
+                let east_b = cross3(m, &up_b);
+                let en = norm3(&east_b);
+                if en > 1e-3 * norm3(m) {
+                    let east_b = scale3(&east_b, 1.0 / en);
+                    let north_b = cross3(&up_b, &east_b);
+                    let q0 = q4::from_matrix(&[east_b, north_b, up_b]);
+                    if !given {
+                        core.update_precision(&heading_exponent(&q0, kappa))?;
+                    }
+                    mag_state.start(m, &up_b);
+                    mag_state.observe(&core.mode4(), m, 0.0, &p, &c);
                 }
-                let norm = norm3(m);
-                let dip = (dot3(m, &up_b) / norm).clamp(-1.0, 1.0).asin();
-                mag_ref = Some(MagRef {
-                    norm,
-                    dip,
-                    cand_norm: norm,
-                    cand_dip: dip,
-                    cand_time: 0.0,
-                });
             }
         }
+        let omega = f.core4()?.omega4()?;
         self.filter = Some(f);
-        self.gyr_lp = *gyr;
-        self.acc_lp = *acc_raw;
-        self.acc_filter = InertialLowPass::new(self.coeffs.acc, self.coeffs.acc_warmup, acc);
-        self.mag_filter =
-            mag.map(|m| InertialLowPass::new(self.coeffs.mag, self.coeffs.mag_warmup, m));
-        self.mag = mag_ref;
+        self.s.gyr_lp = *gyr;
+        self.s.acc_lp = *acc_raw;
+        self.s.rest_timer = 0.0;
+        self.s.acc_filter = InertialLowPass::new(c.acc, c.acc_warmup, &acc);
+        self.s.mag = mag_state;
+        self.s.since = 0;
+        self.s.omega = [omega[0], omega[1], omega[2], omega[3]];
+        self.s.bias.pending = Matrix3::zeros();
         self.samples = 1;
         Ok(())
     }
 
     /// Processes `gyr.len()` samples (`acc` the same length, `mag` too or `None`), writing the
     /// quaternion after each into `quat` (and, if given, the total angular spread into
-    /// `spread`, see [`Ahrs::update_spread`]). Stops at the first refused sample: the samples
-    /// before it are processed and their outputs written, the refused one changes nothing; the
-    /// error names the index.
+    /// `spread`, see [`Ahrs::update_spread`]). A row of NaN in `acc` or `mag` means "no sample"
+    /// for that sensor at that time (see [`Ahrs::update`]). Stops at the first refused sample:
+    /// the samples before it are processed and their outputs written, the refused one changes
+    /// nothing; the error names the index.
     pub fn update_batch(
         &mut self,
         gyr: &[[f64; 3]],
@@ -575,20 +480,169 @@ impl Ahrs {
     }
 
     /// [`Ahrs::update`] followed by the total angular spread (radians) of the new state, as one
-    /// step: if the spread cannot be evaluated, the sample is refused and nothing changes.
+    /// step (the spread comes from quantities the update keeps; it cannot fail once the
+    /// update succeeded).
     pub fn update_spread(
         &mut self,
         gyr: &[f64; 3],
         acc: &[f64; 3],
         mag: Option<&[f64; 3]>,
     ) -> Result<f64> {
-        let mut next = self.clone();
-        next.update(gyr, acc, mag)?;
+        self.update(gyr, acc, mag)?;
         let mut out = [0.0; 4];
-        next.angular_spread(&mut out)?;
-        *self = next;
+        self.angular_spread(&mut out)?;
         Ok(out[3])
     }
+}
+
+/// One sample after the first (the per-sensor steps of the module documentation) on the
+/// working copies; returns the gyroscope increment and whether the field sample was used.
+fn step(
+    p: &AhrsParams,
+    c: &Coeffs,
+    core: &mut Core<4>,
+    s: &mut SampleState,
+    gyr: &[f64; 3],
+    acc: Option<&[f64; 3]>,
+    mag: Option<&[f64; 3]>,
+) -> Result<([f64; 4], bool)> {
+    let dt = p.sample_time;
+
+    // 1. Rest detection and the bias at rest.
+    let mut da = f64::INFINITY;
+    for (lp, x) in s.gyr_lp.iter_mut().zip(gyr) {
+        *lp += c.rest_filter * (x - *lp);
+    }
+    if let Some(a) = acc {
+        for (lp, x) in s.acc_lp.iter_mut().zip(a) {
+            *lp += c.rest_filter * (x - *lp);
+        }
+        da = norm3(&[a[0] - s.acc_lp[0], a[1] - s.acc_lp[1], a[2] - s.acc_lp[2]]);
+    }
+    let g = &s.gyr_lp;
+    let dg = norm3(&[gyr[0] - g[0], gyr[1] - g[1], gyr[2] - g[2]]);
+    let still = dg < p.rest_gyro && da < p.rest_acc && norm3(g) < 2.0 * p.bias_max;
+    s.rest_timer = if still { s.rest_timer + dt } else { 0.0 };
+    if s.rest_timer >= p.rest_time {
+        // the variance of a first-order low-pass of white noise of density gyro_noise
+        let r = p.gyro_noise * p.gyro_noise / (2.0 * REST_FILTER_TIME);
+        s.bias.rest(&s.gyr_lp, c.rest_bias, r);
+        s.bias.clip(p.bias_max);
+    }
+
+    // 2. Gyroscope: the exact turn, the process noise accumulated.
+    let b = s.bias.b;
+    let w = [
+        (gyr[0] - b[0]) * dt,
+        (gyr[1] - b[1]) * dt,
+        (gyr[2] - b[2]) * dt,
+    ];
+    let rate = norm3(&w) / dt;
+    let dq = q4::from_rotation_vector(&w);
+    core.rotate4(&dq);
+    let scale = p.gyro_scale_noise * rate;
+    // at most 1 rad² per sample: a wider noise is uniform for all purposes
+    let q = ((p.gyro_noise * p.gyro_noise + scale * scale) * dt).min(1.0);
+    let drift = if p.bias_time > 0.0 {
+        p.bias_std * p.bias_std / p.bias_time * dt
+    } else {
+        0.0
+    };
+    s.bias.predict(&rotation_matrix(&dq), dt, q, drift);
+    // the estimate is clipped to ±bias_max: its variance need not grow beyond (2·bias_max)²
+    let cap = 3.0 * 4.0 * p.bias_max * p.bias_max;
+    if s.bias.p.trace() > cap {
+        s.bias.p *= cap / s.bias.p.trace();
+    }
+
+    // 3. Accelerometer: low-passed in the gyroscope-integrated frame.
+    s.acc_filter.turn(&dq);
+    if let Some(a) = acc {
+        let a = turn_forward(a, &w, c.acc_lead);
+        if norm3(&a) >= 0.25 * p.gravity {
+            s.acc_filter.step(&a);
+        }
+    }
+
+    // 4. Magnetometer: disturbance phases and the world-frame average.
+    let mag_used = match mag {
+        Some(m) => {
+            let m = turn_forward(m, &w, c.mag_lead);
+            s.mag.observe(&core.mode4(), &m, rate, p, c)
+        }
+        None => false,
+    };
+
+    // 5. Correction.
+    s.since += 1;
+    if s.since >= c.correct_every {
+        correct(p, c, core, s)?;
+        s.since = 0;
+    }
+    Ok((dq, mag_used))
+}
+
+/// The correction step (module documentation, step 5).
+fn correct(p: &AhrsParams, c: &Coeffs, core: &mut Core<4>, s: &mut SampleState) -> Result<()> {
+    let t = c.correct_time;
+    let noise = s.bias.take_pending();
+    core.compose_moment4(&Vector4::from(s.omega), &noise_moment(&noise))?;
+    let lam_prior = {
+        let (m, z) = core.params4();
+        precision(m, z)
+    };
+    let q_prior = core.mode4();
+
+    let mut evidence = Matrix4::zeros();
+    let mut observed = false;
+    let an = norm3(&s.acc_filter.y);
+    if an >= 0.25 * p.gravity && an.is_finite() {
+        let excess = (an - p.gravity) / p.acc_reject;
+        let kappa = t / (p.acc_noise * p.acc_noise * p.acc_tau) / (1.0 + excess * excess);
+        evidence += observation_exponent(&scale3(&s.acc_filter.y, 1.0 / an), &UP, kappa);
+        observed = true;
+    }
+    let heading = s.mag.heading_error();
+    if let Some(delta) = heading {
+        let kappa = t / (p.mag_noise * p.mag_noise * p.mag_tau);
+        let rz = [(0.5 * delta).cos(), 0.0, 0.0, (0.5 * delta).sin()];
+        evidence += heading_exponent(&q4::mul(&rz, &q_prior), kappa);
+        observed = true;
+    }
+    if observed {
+        core.update_precision(&evidence)?;
+    }
+    let omega = core.omega4()?;
+    let q_post = core.mode4();
+    // The posterior covariance in the prior's frame (the prior's precision plus the
+    // evidence's, both at the prior mode: the Gaussian conditioning of the bias needs the two
+    // in one frame; nearly unobserved directions of the two states need not line up).
+    let sigma_post = pinv(&(lam_prior + evidence_precision(&q_prior, &evidence)));
+
+    // The bias from the move of the mode. Without a heading observation the mode may slide
+    // about the vertical (nearly equal concentrations): only the tilt part of the move counts.
+    let mut mu = Vector3::from(q4::to_rotation_vector(&q4::mul(
+        &q4::conj(&q_prior),
+        &q_post,
+    )));
+    if heading.is_none() {
+        let up_b = Vector3::from(q4::rotate_inverse(&q_prior, &UP));
+        mu -= up_b * up_b.dot(&mu);
+    }
+    s.bias
+        .correct(&lam_prior, &mu, &sigma_post, p.bias_time > 0.0);
+    s.bias.clip(p.bias_max);
+
+    // The heading correction turns the field's average with it.
+    if heading.is_some() {
+        let mut dw = q4::mul(&q_post, &q4::conj(&q_prior));
+        if dw[0] < 0.0 {
+            dw = dw.map(|v| -v);
+        }
+        s.mag.turn_heading(2.0 * dw[3].atan2(dw[0]));
+    }
+    s.omega = [omega[0], omega[1], omega[2], omega[3]];
+    Ok(())
 }
 
 /// `e` with "sample k: " in front of its message.

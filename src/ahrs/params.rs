@@ -20,6 +20,10 @@ pub const MIN_STEP_NOISE: f64 = 1e-6;
 /// seconds.
 pub const MAX_LATENCY: f64 = 0.5;
 
+/// The value of [`AhrsParams::mag_latency`] that compensates the AHRS's online estimate of
+/// the magnetometer's latency (`BINGHAM_AHRS_LATENCY_ESTIMATE` in C; the default).
+pub const LATENCY_ESTIMATE: f64 = -1.0;
+
 /// Parameters of the AHRS (`bingham_ahrs_params` in C, `AhrsParams` in Rust). The defaults —
 /// `bingham_ahrs_params_default()` in C, `AhrsParams::new(sample_time)` in Rust — are the tuned
 /// set: tuned once on the nine BROAD trials, one set for all recordings. Angles in radians,
@@ -29,12 +33,14 @@ pub const MAX_LATENCY: f64 = 0.5;
 pub struct AhrsParams {
     /// Sampling period in seconds (1e-6 to 1e3).
     pub sample_time: f64,
-    /// Orientation process noise in rad/√s: the prediction adds isotropic rotation noise with
-    /// standard deviation `gyro_noise·√sample_time` per step (gyroscope noise, bias drift and
-    /// model error together).
+    /// Orientation process noise in rad/√s: the prediction adds isotropic rotation noise of
+    /// variance `gyro_noise²` per second (the gyroscope's noise and model error; the bias's
+    /// uncertainty is added separately, see `bias_std`).
     pub gyro_noise: f64,
-    /// Angular standard deviation (rad) of one accelerometer direction sample as a measurement
-    /// of "up" (`κ = 1/acc_noise²`).
+    /// Angular standard deviation (rad) of the low-passed accelerometer direction as a
+    /// measurement of "up". Its errors (linear accelerations that have not averaged out) are
+    /// correlated over `acc_tau`, so it is worth `1/(acc_noise²·acc_tau)` rad⁻² of tilt
+    /// precision per second, whatever the sample rate.
     pub acc_noise: f64,
     /// Linear-acceleration rejection scale in m/s²: `κ` is divided by
     /// `1 + ((|ā| − gravity)/acc_reject)²`, `ā` the low-passed accelerometer.
@@ -46,7 +52,8 @@ pub struct AhrsParams {
     pub mag_tau: f64,
     /// Magnitude of gravity in m/s².
     pub gravity: f64,
-    /// Angular standard deviation (rad) of one magnetometer heading sample (`κ = 1/mag_noise²`).
+    /// Angular standard deviation (rad) of the low-passed field's heading as a measurement of
+    /// the heading; worth `1/(mag_noise²·mag_tau)` rad⁻² of heading precision per second.
     pub mag_noise: f64,
     /// Relative tolerance on the magnetic field's norm before a sample counts as disturbed.
     pub mag_norm_tol: f64,
@@ -56,8 +63,10 @@ pub struct AhrsParams {
     pub mag_ref_time: f64,
     /// A disturbance whose norm and dip stay steady this long (s) becomes the new reference.
     pub mag_new_time: f64,
-    /// Time constant (s) of the gyroscope-bias estimation from the observations' corrections
-    /// during motion (`0` disables it).
+    /// Forgetting time (s) of the gyroscope-bias estimate: the bias is modelled as a random
+    /// walk whose variance grows by `bias_std²` per `bias_time`, so older evidence about it
+    /// counts less. `0` disables the estimation in motion (the bias is then learned at rest
+    /// only; its uncertainty still widens the orientation's spread).
     pub bias_time: f64,
     /// Largest gyroscope bias (rad/s) per axis the estimate may reach.
     pub bias_max: f64,
@@ -76,8 +85,9 @@ pub struct AhrsParams {
     /// field sample is turned forward by the bias-corrected rate of its sample times the
     /// latency (in the sensor frame `m ← exp(−[ω]× mag_latency) m`: the rotation by the
     /// rotation vector `−ω·mag_latency`) before the disturbance test and the low-pass filter.
-    /// Default 0: no compensation. The AHRS estimates this latency from the data as a readout
-    /// (`bingham_ahrs_mag_latency_estimate()` in C, `Ahrs::mag_latency_estimate` in Rust). The
+    /// `LATENCY_ESTIMATE` (−1, `BINGHAM_AHRS_LATENCY_ESTIMATE` in C; the default): compensate
+    /// the AHRS's own online estimate (`bingham_ahrs_mag_latency_estimate()` in C,
+    /// `Ahrs::mag_latency_estimate` in Rust), none until it exists. `0`: no compensation. The
     /// time of gyroscope sample k is taken as its interval (t_{k−1}, t_k], the interval over
     /// which the prediction turns the state with it.
     pub mag_latency: f64,
@@ -85,6 +95,16 @@ pub struct AhrsParams {
     /// gyroscope, compensated as `mag_latency`: each sample is turned forward by the rate times
     /// the latency before the low-pass filter. Default 0: no compensation.
     pub acc_latency: f64,
+    /// Initial standard deviation (rad/s, per axis) of the gyroscope bias: the Kalman filter of
+    /// the bias starts from 0 with this uncertainty, which sets how fast a bias is learned
+    /// from the corrections during motion, and how much an unknown bias widens the
+    /// orientation's spread.
+    pub bias_std: f64,
+    /// Process noise (√s) per rad/s of rotation rate: the orientation's noise variance grows by
+    /// `(gyro_scale_noise·|ω|)²` per second on top of `gyro_noise²` (scale-factor and
+    /// axis-misalignment errors, and residual latency, turn into angle errors in proportion
+    /// to the rate).
+    pub gyro_scale_noise: f64,
 }
 
 impl AhrsParams {
@@ -93,12 +113,12 @@ impl AhrsParams {
         AhrsParams {
             sample_time,
             gyro_noise: 0.008,
-            acc_noise: 0.4,
+            acc_noise: 0.007,
             acc_reject: 1.0,
             acc_tau: 3.0,
             mag_tau: 9.0,
             gravity: 9.81,
-            mag_noise: 0.6,
+            mag_noise: 0.006,
             mag_norm_tol: 0.1,
             mag_dip_tol: 10f64.to_radians(),
             mag_ref_time: 20.0,
@@ -110,15 +130,17 @@ impl AhrsParams {
             rest_acc: 0.5,
             rest_bias_time: 2.0,
             init_std: 0.1,
-            mag_latency: 0.0,
+            mag_latency: LATENCY_ESTIMATE,
             acc_latency: 0.0,
+            bias_std: 0.5f64.to_radians(),
+            gyro_scale_noise: 0.01,
         }
     }
 
     /// Checks every field (finite; periods, noises and thresholds positive; `bias_time ≥ 0`;
     /// `sample_time` within [`MIN_SAMPLE_TIME`, `MAX_SAMPLE_TIME`]; the process noise per step
     /// at least [`MIN_STEP_NOISE`]; `mag_latency` and `acc_latency` within 0 to
-    /// [`MAX_LATENCY`]).
+    /// [`MAX_LATENCY`], `mag_latency` also [`LATENCY_ESTIMATE`]).
     pub fn validate(&self) -> Result<()> {
         let positive = [
             ("sample_time", self.sample_time),
@@ -139,6 +161,7 @@ impl AhrsParams {
             ("rest_acc", self.rest_acc),
             ("rest_bias_time", self.rest_bias_time),
             ("init_std", self.init_std),
+            ("bias_std", self.bias_std),
         ];
         for (name, v) in positive {
             if !(v.is_finite() && v > 0.0) {
@@ -167,13 +190,25 @@ impl AhrsParams {
                 self.bias_time
             )));
         }
+        if !(self.gyro_scale_noise.is_finite() && self.gyro_scale_noise >= 0.0) {
+            return Err(Error::InvalidArgument(format!(
+                "AHRS parameter `gyro_scale_noise` must be finite and >= 0, got {}",
+                self.gyro_scale_noise
+            )));
+        }
         for (name, v) in [
             ("mag_latency", self.mag_latency),
             ("acc_latency", self.acc_latency),
         ] {
-            if !(0.0..=MAX_LATENCY).contains(&v) {
+            let auto = name == "mag_latency" && v == LATENCY_ESTIMATE;
+            if !(auto || (0.0..=MAX_LATENCY).contains(&v)) {
                 return Err(Error::InvalidArgument(format!(
-                    "AHRS parameter `{name}` must lie in [0, {MAX_LATENCY}] s, got {v}"
+                    "AHRS parameter `{name}` must lie in [0, {MAX_LATENCY}] s{}, got {v}",
+                    if name == "mag_latency" {
+                        " or be LATENCY_ESTIMATE (-1: the online estimate)"
+                    } else {
+                        ""
+                    }
                 )));
             }
         }

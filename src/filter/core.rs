@@ -83,19 +83,6 @@ impl<const D: usize> Core<D> {
         Ok(())
     }
 
-    /// The typed door of [`Self::predict`] for in-crate callers that hold their process noise
-    /// prepared once ([`Noise::process`]) and a unit rotation `u` (no validation, no cache
-    /// lookup; `u` is normalized as the slice door normalizes it).
-    pub(crate) fn predict_prepared(&mut self, u: &[f64; D], noise: &Noise<D>) -> Result<()> {
-        let n = u.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let u = Vect::<D>::from_fn(|i, _| u[i] / n);
-        let (m, z, solution) = composed(&self.m, &self.z, self.predicted.as_ref(), Some(u), noise)?;
-        self.m = m;
-        self.z = z;
-        self.predicted = Some(solution);
-        Ok(())
-    }
-
     /// `M_L = L(ẑ) D M_v`: the likelihood's principal directions.
     fn likelihood_m(zhat: &Vect<D>, m_v: &Mat<D>) -> Mat<D> {
         let mut dm = *m_v;
@@ -198,6 +185,62 @@ impl Core<4> {
         let mode = self.m.column(3);
         [mode[0], mode[1], mode[2], mode[3]]
     }
+
+    /// The principal directions (`M`, columns; the last is the mode) and concentrations (`z`,
+    /// ascending, last 0).
+    pub(crate) fn params4(&self) -> (&Mat<4>, &Vect<4>) {
+        (&self.m, &self.z)
+    }
+
+    /// The exact rotation `x ← x ⊕ u` (`u` unit): `M ← R(u) M`, `z` unchanged. No moment
+    /// matching, no failure; the warm start of the next prediction stays valid (it depends on
+    /// `z` only).
+    pub(crate) fn rotate4(&mut self, u: &[f64; 4]) {
+        self.m = right(Const::<4>, u) * self.m;
+    }
+
+    /// Prediction `x ← x ⊕ w` by a noise `w` given by its second moment `s` (symmetric, trace
+    /// 1), with `w_state = omega(z)` of the current state supplied by the caller (who caches it
+    /// with the spread). The state is assigned only on success.
+    pub(crate) fn compose_moment4(&mut self, w_state: &Vect<4>, s: &Mat<4>) -> Result<()> {
+        let a = congruence(&self.m, w_state);
+        let c = compose_moments(&a, s);
+        let (m, z, solution) = fit_second_moment(&c, self.predicted.as_ref())?;
+        self.m = m;
+        self.z = z;
+        self.predicted = Some(solution);
+        Ok(())
+    }
+
+    /// `omega(z)` (the second moments along the principal directions; concentrations capped
+    /// as in the prediction): what [`Self::compose_moment4`] and the spread need.
+    pub(crate) fn omega4(&self) -> Result<Vect<4>> {
+        omega(&capped(&self.z))
+    }
+
+    /// The part of the state a failed multi-step sample must restore (`M`, `z`, warm start).
+    pub(crate) fn save4(&self) -> Saved4 {
+        Saved4 {
+            m: self.m,
+            z: self.z,
+            predicted: self.predicted.clone(),
+        }
+    }
+
+    /// Restores what [`Self::save4`] saved.
+    pub(crate) fn restore4(&mut self, s: Saved4) {
+        self.m = s.m;
+        self.z = s.z;
+        self.predicted = s.predicted;
+    }
+}
+
+/// A saved d = 4 state (see [`Core::save4`]).
+#[derive(Debug, Clone)]
+pub(crate) struct Saved4 {
+    m: Mat<4>,
+    z: Vect<4>,
+    predicted: Option<Derivs<Const<4>>>,
 }
 
 /// The state after `x ⊕ u ⊕ w`: the exact second moment of the composition (the state's moment

@@ -110,11 +110,3 @@ impl<const D: usize> NoiseCache<D> {
 pub(super) fn capped<const D: usize>(z: &Vect<D>) -> Vect<D> {
     z.map(|v| v.max(-MAX_CONCENTRATION))
 }
-
-impl<const D: usize> Noise<D> {
-    /// A process noise `Bingham(m, z)` (`m` row-major `D×D`, `z` length `D`), validated and
-    /// prepared once, for [`super::Core::predict_prepared`].
-    pub(crate) fn process(m: &[f64], z: &[f64]) -> Result<Noise<D>> {
-        NoiseCache::<D>::build(Role::Process, m, z)
-    }
-}

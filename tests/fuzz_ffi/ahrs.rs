@@ -51,11 +51,13 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
             f64::NAN,
             f64::INFINITY,
         ]),
-        1 => *rng.pick(&[0.0, -0.0, 5e-324, 1e-3, 0.011, 0.5]),
+        1 => *rng.pick(&[0.0, -0.0, 5e-324, 1e-3, 0.011, 0.5, -1.0]),
         _ => 0.0,
     };
     let (mag_latency, acc_latency) = (latency(&mut rng), latency(&mut rng));
     let valid_latency = |v: f64| (0.0..=0.5).contains(&v);
+    // −1 (BINGHAM_AHRS_LATENCY_ESTIMATE) is a valid magnetometer latency only
+    let valid_mag_latency = |v: f64| v == -1.0 || valid_latency(v);
     // bias_std (rad/s, > 0) and gyro_scale_noise (√s, ≥ 0): hostile, valid, or the default
     let hostile = [-0.0, -1e-9, -1.0, f64::NAN, f64::INFINITY, -f64::INFINITY];
     let bias_std = match rng.below(6) {
@@ -81,7 +83,7 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
         Some("sample_time")
     } else if !valid_scale {
         Some("gyro_scale_noise")
-    } else if !valid_latency(mag_latency) {
+    } else if !valid_mag_latency(mag_latency) {
         Some("mag_latency")
     } else if !valid_latency(acc_latency) {
         Some("acc_latency")
@@ -119,9 +121,9 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
             return Err(format!("params_default(0.01): {}", last_error()));
         }
         p.sample_time = dt;
-    } else if p.sample_time != dt || p.mag_latency != 0.0 || p.acc_latency != 0.0 {
+    } else if p.sample_time != dt || p.mag_latency != -1.0 || p.acc_latency != 0.0 {
         return Err(format!(
-            "params_default: sample_time {} ≠ {dt} or latencies {} {} ≠ 0",
+            "params_default: sample_time {} ≠ {dt} or latencies {} {} ≠ −1, 0",
             p.sample_time, p.mag_latency, p.acc_latency
         ));
     }

@@ -1,0 +1,286 @@
+//! The magnetic reference (the field's norm and dip), the disturbance decided per phase, the
+//! field averaged in the world frame of the estimate, and the heading observation it gives.
+//!
+//! - **Per phase, with hysteresis.** A field whose norm (low-passed over [`TEST_TIME`], so that
+//!   the sensor's noise does not trip the test at high sample rates) differs from the
+//!   reference by more than `mag_norm_tol` (relative) or whose dip differs by more than
+//!   `mag_dip_tol` starts a disturbed phase; the phase ends only after [`RECOVER_TIME`] of samples that all pass. A
+//!   field that passes the test now and then near a magnet is not representative of the
+//!   undisturbed one (the samples that pass are a biased subset), so nothing of a disturbed
+//!   phase is used; the average continues after it from where it was (it lives in the world
+//!   frame of the estimate, so it is still valid), and a few samples that pass at the start
+//!   of the next phase move it no more than any others.
+//! - **A new reference** only from a disturbance whose norm and dip stay steady while the
+//!   sensor rotates (at least [`NEW_REF_RATE`]) for `mag_new_time` seconds of rotation: a
+//!   homogeneous new field keeps its norm and dip however the sensor turns; a magnet fixed to
+//!   the sensor does not.
+//! - **Averaged in the world frame of the estimate.** Each undisturbed sample is mapped to the
+//!   world with the current estimate (gyroscope and accelerometer corrections included) and
+//!   low-passed there (`mag_tau`). Each heading correction the AHRS makes turns the average
+//!   with it, so that the average stays the field relative to the current heading; tilt
+//!   corrections do not (the samples were mapped with the tilt known at their time, which the
+//!   accelerometer keeps right; turning the average by gyroscope increments instead, as in a
+//!   gyroscope-only frame, would carry the gyroscope's drift into the average during sustained
+//!   rotation, multiplied by tan(dip) in heading).
+
+use nalgebra::Matrix4;
+
+use super::lowpass::{Coeffs, InertialLowPass};
+use super::vec3::{dot3, norm3};
+use super::AhrsParams;
+use crate::quaternion::q4;
+
+/// Time (s) a field must pass the disturbance test without interruption to end a disturbed
+/// phase (VQF uses the same half second).
+pub(super) const RECOVER_TIME: f64 = 0.5;
+
+/// Time constant (s) of the low-pass filter of the norm and dip the disturbance test sees.
+pub(super) const TEST_TIME: f64 = 0.015;
+
+/// Rotation rate (rad/s, 20°/s) above which a steady disturbance counts toward a new reference.
+pub(super) const NEW_REF_RATE: f64 = 0.35;
+
+const UP: [f64; 3] = [0.0, 0.0, 1.0];
+
+/// The magnetometer's state in the AHRS.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Magnetic {
+    /// Reference norm and dip (rad); `None` before the first field.
+    reference: Option<(f64, f64)>,
+    /// The candidate for a new reference, and the seconds of rotation it has held.
+    cand: (f64, f64),
+    cand_time: f64,
+    /// The sample's norm and dip, low-passed over [`TEST_TIME`] (what the test sees).
+    tested: Option<(f64, f64)>,
+    /// Whether the current phase is disturbed, and how long the test has passed since.
+    disturbed: bool,
+    clean_time: f64,
+    /// The field in the world frame of the estimate, low-passed (`None` until the first
+    /// sample of an undisturbed phase).
+    lp: Option<InertialLowPass>,
+}
+
+impl Magnetic {
+    pub(super) fn new() -> Magnetic {
+        Magnetic {
+            reference: None,
+            cand: (0.0, 0.0),
+            cand_time: 0.0,
+            tested: None,
+            disturbed: false,
+            clean_time: 0.0,
+            lp: None,
+        }
+    }
+
+    /// Whether a reference exists and the current phase is undisturbed.
+    pub(super) fn trusted(&self) -> bool {
+        self.reference.is_some() && !self.disturbed
+    }
+
+    /// Sets the reference from a field sample `m` seen with the body-frame "up" `up_b`.
+    pub(super) fn start(&mut self, m: &[f64; 3], up_b: &[f64; 3]) {
+        let (norm, dip) = norm_dip(m, up_b);
+        self.reference = Some((norm, dip));
+        self.cand = (norm, dip);
+        self.tested = Some((norm, dip));
+        self.disturbed = false;
+        self.clean_time = 0.0;
+    }
+
+    /// One field sample `m` (sensor frame, latency-compensated) with the current estimate `q`
+    /// and the rotation rate `rate` (rad/s): the disturbance test, the reference and the
+    /// average. Returns whether the sample was used (undisturbed phase).
+    pub(super) fn observe(
+        &mut self,
+        q: &[f64; 4],
+        m: &[f64; 3],
+        rate: f64,
+        p: &AhrsParams,
+        c: &Coeffs,
+    ) -> bool {
+        let up_b = q4::rotate_inverse(q, &UP);
+        let (raw_norm, raw_dip) = norm_dip(m, &up_b);
+        // the test sees norm and dip low-passed over TEST_TIME, so that the sensor's noise
+        // does not fail it now and then at high sample rates (both are rotation-invariant)
+        let (norm, dip) = match self.tested {
+            Some((n, d)) => (
+                n + c.mag_test * (raw_norm - n),
+                d + c.mag_test * (raw_dip - d),
+            ),
+            None => (raw_norm, raw_dip),
+        };
+        self.tested = Some((norm, dip));
+        let dt = p.sample_time;
+        let (rn, rd) = *self.reference.get_or_insert((norm, dip));
+        let passes = (norm - rn).abs() <= p.mag_norm_tol * rn && (dip - rd).abs() <= p.mag_dip_tol;
+        if !passes {
+            if !self.disturbed {
+                self.cand = (norm, dip);
+                self.cand_time = 0.0;
+            }
+            self.disturbed = true;
+            self.clean_time = 0.0;
+            self.follow_candidate(norm, dip, rate, p, c);
+            return false;
+        }
+        self.cand_time = 0.0;
+        if self.disturbed {
+            self.clean_time += dt;
+            if self.clean_time < RECOVER_TIME {
+                return false;
+            }
+            self.disturbed = false;
+        }
+        let k = c.mag_ref;
+        self.reference = Some((rn + k * (norm - rn), rd + k * (dip - rd)));
+        let mw = q4::rotate(q, m);
+        match self.lp.as_mut() {
+            Some(lp) => lp.step(&mw),
+            None => self.lp = Some(InertialLowPass::new(c.mag, c.mag_warmup, &mw)),
+        }
+        true
+    }
+
+    /// A disturbed sample: the candidate follows a steady field and becomes the reference
+    /// after `mag_new_time` seconds of rotation.
+    fn follow_candidate(&mut self, norm: f64, dip: f64, rate: f64, p: &AhrsParams, c: &Coeffs) {
+        let (cn, cd) = self.cand;
+        let steady = (norm - cn).abs() <= p.mag_norm_tol * cn && (dip - cd).abs() <= p.mag_dip_tol;
+        if !steady {
+            self.cand = (norm, dip);
+            self.cand_time = 0.0;
+            return;
+        }
+        let k = c.candidate;
+        self.cand = (cn + k * (norm - cn), cd + k * (dip - cd));
+        if rate >= NEW_REF_RATE {
+            self.cand_time += p.sample_time;
+        }
+        if self.cand_time >= p.mag_new_time {
+            self.reference = Some(self.cand);
+            self.cand_time = 0.0;
+            self.disturbed = false;
+            self.clean_time = 0.0;
+            self.lp = None;
+        }
+    }
+
+    /// The heading error `δ` (rad) of the estimate: the rotation about the vertical that turns
+    /// the averaged horizontal field onto north (`None` outside an undisturbed phase or for a
+    /// field along the vertical).
+    pub(super) fn heading_error(&self) -> Option<f64> {
+        if !self.trusted() {
+            return None;
+        }
+        let y = self.lp.as_ref()?.y;
+        let h = (y[0] * y[0] + y[1] * y[1]).sqrt();
+        (h > 1e-3 * norm3(&y)).then(|| y[0].atan2(y[1]))
+    }
+
+    /// Turns the average with a heading correction of the estimate, `q ← Rz(gamma) ⊗ q`
+    /// (`gamma` in rad about the world vertical): the heading error left is `δ − gamma`.
+    pub(super) fn turn_heading(&mut self, gamma: f64) {
+        if let Some(lp) = self.lp.as_mut() {
+            // turn(dq) applies R(dq)ᵀ: pass the inverse rotation Rz(−γ)
+            lp.turn(&[(0.5 * gamma).cos(), 0.0, 0.0, -(0.5 * gamma).sin()]);
+        }
+    }
+}
+
+/// Norm and dip (rad: the angle of `m` above the horizontal, `asin(m·up/|m|)`) of a field
+/// sample seen with the body-frame up `up_b`.
+fn norm_dip(m: &[f64; 3], up_b: &[f64; 3]) -> (f64, f64) {
+    let norm = norm3(m);
+    (norm, (dot3(m, up_b) / norm).clamp(-1.0, 1.0).asin())
+}
+
+/// The exponent matrix `−2κ u uᵀ` of the heading likelihood `exp(−2κ e_z²)`, `e = q ⊗ q_m*`:
+/// `e_z = uᵀ q` with `u` the last row of `R(q_m*)` (`x ⊕ y = R(y) x`). At the mode it is the
+/// von Mises density `exp(κ cos ψ)` of the heading error `ψ` to second order: precision `κ`
+/// (rad⁻²) about the vertical, none on the tilt.
+pub(super) fn heading_exponent(q_m: &[f64; 4], kappa: f64) -> Matrix4<f64> {
+    let c = q4::conj(q_m);
+    // Row 3 of R(c) (see quaternion::right_matrix): [c3, c2, −c1, c0].
+    let u = [c[3], c[2], -c[1], c[0]];
+    Matrix4::from_fn(|i, j| -2.0 * kappa * u[i] * u[j])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn field(dip_deg: f64, heading: f64) -> [f64; 3] {
+        let d = dip_deg.to_radians();
+        [
+            50.0 * d.cos() * heading.sin(),
+            50.0 * d.cos() * heading.cos(),
+            -50.0 * d.sin(),
+        ]
+    }
+
+    #[test]
+    fn a_disturbed_phase_ends_only_after_the_recovery_time() {
+        let p = AhrsParams::new(0.01);
+        let c = Coeffs::new(&p);
+        let q = [1.0, 0.0, 0.0, 0.0];
+        let mut m = Magnetic::new();
+        m.start(&field(60.0, 0.0), &UP);
+        assert!(m.observe(&q, &field(60.0, 0.0), 0.0, &p, &c));
+        // 0.2 s of a disturbed field (norm +30 %)
+        let bad = field(60.0, 0.0).map(|v| v * 1.3);
+        for _ in 0..20 {
+            m.observe(&q, &bad, 0.0, &p, &c);
+        }
+        assert!(!m.trusted());
+        // then a clean field: not used for the first 0.5 s (the low-passed norm also needs a
+        // few samples to come back within tolerance), used from 0.8 s on
+        for _ in 0..50 {
+            assert!(!m.observe(&q, &field(60.0, 0.0), 0.0, &p, &c));
+        }
+        for _ in 0..30 {
+            m.observe(&q, &field(60.0, 0.0), 0.0, &p, &c);
+        }
+        assert!(m.observe(&q, &field(60.0, 0.0), 0.0, &p, &c));
+        assert!(m.heading_error().is_some());
+    }
+
+    #[test]
+    fn a_steady_new_field_becomes_the_reference_only_while_rotating() {
+        let p = AhrsParams {
+            mag_new_time: 1.0,
+            ..AhrsParams::new(0.01)
+        };
+        let c = Coeffs::new(&p);
+        let q = [1.0, 0.0, 0.0, 0.0];
+        let mut m = Magnetic::new();
+        m.start(&field(60.0, 0.0), &UP);
+        let new = field(40.0, 0.0).map(|v| v * 1.5);
+        for _ in 0..300 {
+            assert!(!m.observe(&q, &new, 0.0, &p, &c));
+        }
+        for _ in 0..100 {
+            m.observe(&q, &new, 1.0, &p, &c);
+        }
+        assert!(m.trusted());
+        assert!(m.observe(&q, &new, 1.0, &p, &c));
+    }
+
+    #[test]
+    fn the_heading_error_turns_with_a_correction() {
+        let p = AhrsParams::new(0.01);
+        let c = Coeffs::new(&p);
+        let q = [1.0, 0.0, 0.0, 0.0];
+        let mut m = Magnetic::new();
+        m.start(&field(60.0, 0.3), &UP);
+        for _ in 0..10 {
+            m.observe(&q, &field(60.0, 0.3), 0.0, &p, &c);
+        }
+        let d = m.heading_error().unwrap();
+        assert!((d - 0.3).abs() < 1e-9, "{d}");
+        // the estimate is turned by 0.1 about the vertical: the error left is 0.2
+        m.turn_heading(0.1);
+        let d = m.heading_error().unwrap();
+        assert!((d - 0.2).abs() < 1e-9, "{d}");
+    }
+}
