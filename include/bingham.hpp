@@ -905,7 +905,7 @@ public:
     }
     /// The online estimate of the magnetometer's latency behind the gyroscope (s), or nullopt
     /// while there is none yet (BINGHAM_ERR_NOT_CONVERGED: less than 5 s of informative motion).
-    /// A readout; set mag_latency in the parameters to compensate a latency.
+    /// The default parameters (mag_latency = BINGHAM_AHRS_LATENCY_ESTIMATE) compensate it.
     std::optional<double> mag_latency_estimate() const {
         require("bingham::Ahrs::mag_latency_estimate");
         double l = 0.0;

@@ -19,7 +19,8 @@ set for all trials:
 * Bingham: ``bingham.Ahrs(Ts).update_batch(gyr, acc, mag, spread=True)`` with its default
   (tuned) parameters; also gives the predicted total angular standard deviation ("spread") and,
   after the last sample, its online estimate of the magnetometer's latency (printed per trial).
-  ``--mag-latency SECONDS`` sets ``mag_latency``; ``--mag-latency estimate`` runs each trial
+  ``--mag-latency SECONDS`` sets ``mag_latency`` (default: the library's, which compensates
+  the AHRS's online estimate of the latency); ``--mag-latency estimate`` runs each trial
   twice and sets it to the first run's final estimate (a per-trial calibration from the whole
   trial, not causal; the time is that of the second run);
 * VQF: ``vqf.VQF(Ts)`` default parameters, online 9-D output ``quat9D`` (C++ batch call);
@@ -106,10 +107,11 @@ def _bingham():
     return bingham
 
 
-def run_bingham(trial, mag_latency=0.0):
+def run_bingham(trial, mag_latency=None):
     """The Bingham AHRS on one trial: (quaternions N×4, predicted spread N in rad, seconds,
     {"mag_latency": the latency compensated (s), "mag_latency_estimate": the AHRS's online
-    estimate after the last sample (s, or None)}). ``mag_latency``: seconds, or ``"estimate"``:
+    estimate after the last sample (s, or None)}). ``mag_latency``: None (the default
+    parameters: the online estimate compensated), seconds, or ``"estimate"``:
     a first run with the defaults, then the timed run with ``mag_latency`` = the first run's
     final estimate (a per-trial calibration from the whole trial, not causal)."""
     import bingham
@@ -117,11 +119,12 @@ def run_bingham(trial, mag_latency=0.0):
         first = bingham.Ahrs(trial["Ts"])
         first.update_batch(trial["gyr"], trial["acc"], trial["mag"])
         mag_latency = first.mag_latency_estimate() or 0.0
-    ahrs_filter = bingham.Ahrs(trial["Ts"], mag_latency=float(mag_latency))
+    overrides = {} if mag_latency is None else {"mag_latency": float(mag_latency)}
+    ahrs_filter = bingham.Ahrs(trial["Ts"], **overrides)
     t0 = time.perf_counter()
     q, spread = ahrs_filter.update_batch(trial["gyr"], trial["acc"], trial["mag"], spread=True)
     seconds = time.perf_counter() - t0
-    readout = {"mag_latency": float(mag_latency),
+    readout = {"mag_latency": ahrs_filter.params.mag_latency,
                "mag_latency_estimate": ahrs_filter.mag_latency_estimate()}
     return np.asarray(q, dtype=np.float64), np.asarray(spread, dtype=np.float64), seconds, readout
 
@@ -196,7 +199,7 @@ def evaluate(job):
     """Runs the filters on one trial; returns (results, total-error series for the plot or None).
     ``job``: (path, filters, keep_series[, mag_latency of the Bingham AHRS, see run_bingham])."""
     path, filters, keep_series = job[:3]
-    mag_latency = job[3] if len(job) > 3 else 0.0
+    mag_latency = job[3] if len(job) > 3 else None
     trial = load_trial(path)
     n = len(trial["gyr"])
     sel = trial["movement"] & ~np.isnan(trial["truth"][:, 0])
@@ -348,11 +351,13 @@ def main(argv=None):
     ap.add_argument("--json", metavar="OUT.json", help="write all numbers as JSON")
     ap.add_argument("--jobs", type=int, default=0,
                     help="worker processes over trials (default: CPU count with peers, else 1)")
-    ap.add_argument("--mag-latency", default="0", metavar="SECONDS|estimate",
-                    help="the Bingham AHRS's mag_latency: seconds (default 0), or 'estimate': "
+    ap.add_argument("--mag-latency", default=None, metavar="SECONDS|estimate",
+                    help="the Bingham AHRS's mag_latency: seconds (default: the library's, "
+                         "-1 = its online estimate compensated), or 'estimate': "
                          "per trial the AHRS's own final estimate from a first run")
     args = ap.parse_args(argv)
-    mag_latency = args.mag_latency if args.mag_latency == "estimate" else float(args.mag_latency)
+    mag_latency = (args.mag_latency if args.mag_latency in (None, "estimate")
+                   else float(args.mag_latency))
 
     ddir = data_dir(args.data_dir)
     paths = sorted(glob.glob(os.path.join(ddir, "*.npz")))
@@ -420,7 +425,8 @@ def main(argv=None):
     if "bingham" in filters:
         print("Bingham cal: RMS of the actual total error / RMS of the predicted spread "
               "(1 = calibrated, > 1 = overconfident)")
-        print(f"Bingham mag_latency: {args.mag_latency}; its online estimate of the magnetometer "
+        setting = args.mag_latency or "default (-1: the online estimate compensated)"
+        print(f"Bingham mag_latency: {setting}; its online estimate of the magnetometer "
               "latency after the last sample (ms):")
         print("  " + ", ".join(
             f"{k[:2]} {1e3 * est:.1f}" if est is not None else f"{k[:2]} --"

@@ -48,7 +48,7 @@ from ._library import (
     library_path,
     version,
 )
-from .ahrs import Ahrs, AhrsParams
+from .ahrs import LATENCY_ESTIMATE, Ahrs, AhrsParams
 from .distribution import (
     angular_spread,
     compose,
@@ -76,6 +76,7 @@ from .filter import Filter
 
 __all__ = [
     "__version__",
+    "LATENCY_ESTIMATE",
     "Array",
     "BinghamError",
     "Status",

@@ -12,7 +12,11 @@ from ._arrays import Array, ArrayLike, _in, _ptr
 from .errors import Status, _check
 from ._library import lib
 
-__all__ = ["AhrsParams", "Ahrs"]
+__all__ = ["AhrsParams", "Ahrs", "LATENCY_ESTIMATE"]
+
+#: ``mag_latency`` value (the default) that compensates the AHRS's online estimate of the
+#: magnetometer's latency (``BINGHAM_AHRS_LATENCY_ESTIMATE`` in C).
+LATENCY_ESTIMATE = -1.0
 
 
 class AhrsParams(ctypes.Structure):

@@ -25,8 +25,9 @@ pub const MAX_LATENCY: f64 = 0.5;
 pub const LATENCY_ESTIMATE: f64 = -1.0;
 
 /// Parameters of the AHRS (`bingham_ahrs_params` in C, `AhrsParams` in Rust). The defaults —
-/// `bingham_ahrs_params_default()` in C, `AhrsParams::new(sample_time)` in Rust — are the tuned
-/// set: tuned once on the nine BROAD trials, one set for all recordings. Angles in radians,
+/// `bingham_ahrs_params_default()` in C, `AhrsParams::new(sample_time)` in Rust — are one set
+/// for all recordings and sample rates, tuned on the nine BROAD trials and a simulated IMU
+/// suite; docs/guide.md ("The defaults and why") gives the mechanism behind each value. Angles in radians,
 /// times in seconds. Fill it with the defaults, then change fields if needed.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -113,12 +114,12 @@ impl AhrsParams {
         AhrsParams {
             sample_time,
             gyro_noise: 0.008,
-            acc_noise: 0.007,
+            acc_noise: 0.0099,
             acc_reject: 1.0,
-            acc_tau: 3.0,
-            mag_tau: 9.0,
+            acc_tau: 1.5,
+            mag_tau: 3.0,
             gravity: 9.81,
-            mag_noise: 0.006,
+            mag_noise: 0.0104,
             mag_norm_tol: 0.1,
             mag_dip_tol: 10f64.to_radians(),
             mag_ref_time: 20.0,
@@ -133,7 +134,7 @@ impl AhrsParams {
             mag_latency: LATENCY_ESTIMATE,
             acc_latency: 0.0,
             bias_std: 0.5f64.to_radians(),
-            gyro_scale_noise: 0.01,
+            gyro_scale_noise: 0.004,
         }
     }
 
