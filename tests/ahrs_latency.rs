@@ -240,7 +240,7 @@ fn the_default_compensates_the_online_estimate() {
     // magnetometer 2 samples late: the default (LATENCY_ESTIMATE) compensates the estimate
     // from the moment it exists (about 10 s here); from 30 s on it removes most of the error
     // the latency causes (the heading recovers from the error gathered before the estimate
-    // existed with the heading's time constant and the field average's 9-s memory).
+    // existed with the heading's time constant and the field average's memory).
     let late = simulate(&Spin::new(100.0, 1.5, 2));
     let p = AhrsParams::new(0.01);
     assert_eq!(p.mag_latency, LATENCY_ESTIMATE);

@@ -19,7 +19,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import broad  # noqa: E402
 
 # docs/accuracy.md's figure for the default parameters (mean total RMSE over the nine trials, degrees).
-DOCUMENTED_MEAN_TOTAL = 2.22
+DOCUMENTED_MEAN_TOTAL = 2.07
 # What the peers achieve on the same nine trials (the data's README; reproduced by broad.py).
 MADGWICK = {"02": 1.67, "07": 4.51, "09": 2.53, "11": 3.91, "16": 4.41, "25": 3.33,
             "27": 8.78, "30": 7.13, "34": 7.21}
@@ -44,7 +44,8 @@ def results():
 def test_mean_total_rmse_matches_documented_figure(results):
     mean = sum(r["total"] for r in results.values()) / len(results)
     assert abs(mean - DOCUMENTED_MEAN_TOTAL) <= 0.05 * DOCUMENTED_MEAN_TOTAL, mean
-    assert mean <= 1.2 * VQF_MEAN
+    # issue 20's acceptance: at most 0.95 of VQF's mean on the nine
+    assert mean <= 0.95 * VQF_MEAN, mean
 
 
 def test_every_trial_better_than_madgwick(results):
@@ -63,9 +64,10 @@ def test_group_means_better_than_madgwick(results):
 
 def test_spread_is_calibrated_overall(results):
     # RMS of the actual error / RMS of the predicted spread, over the movement samples: the
-    # median trial within [0.5, 2] (per-trial figures are in docs/accuracy.md; trial 27's field is
-    # steadily off by ~7 degrees, an error no sensor here can see).
+    # median trial within [0.5, 2] and every trial but 27 (per-trial figures are in
+    # docs/accuracy.md; trial 27's field is steadily off by ~7 degrees, an error no sensor here
+    # can see).
     ratios = sorted(r["calibration_ratio"] for r in results.values())
     assert 0.5 <= ratios[len(ratios) // 2] <= 2.0, ratios
-    inside = [x for x in ratios if 0.5 <= x <= 2.0]
-    assert len(inside) >= 6, ratios
+    inside = {t for t, r in results.items() if 0.5 <= r["calibration_ratio"] <= 2.0}
+    assert inside >= set(results) - {"27"}, ratios

@@ -114,9 +114,15 @@ impl BiasState {
     }
 }
 
-/// `a` symmetrized with negative eigenvalues raised to zero.
+/// `a` symmetrized with negative eigenvalues raised to zero. A positive definite `a` (all
+/// leading principal minors positive, the common case) is returned without an eigensolve.
 pub(super) fn psd(a: &Matrix3<f64>) -> Matrix3<f64> {
     let s = (a + a.transpose()) * 0.5;
+    let m1 = s[(0, 0)];
+    let m2 = s[(0, 0)] * s[(1, 1)] - s[(0, 1)] * s[(1, 0)];
+    if m1 > 0.0 && m2 > 0.0 && s.determinant() > 0.0 {
+        return s;
+    }
     let e = SymmetricEigen::new(s);
     if e.eigenvalues.iter().all(|&v| v >= 0.0) {
         return s;
@@ -142,17 +148,18 @@ pub(super) fn precision(m: &Matrix4<f64>, z: &Vector4<f64>) -> Matrix3<f64> {
 
 /// The body-frame precision `H` that the likelihood `exp(qᵀ E q)` puts on the orientation
 /// error at `q` (its Hessian in `θ`, `q ⊗ exp(θ/2)`): with `A = L(q)ᵀ E L(q)`,
-/// `H = −½ (A_vv − A_00 I)` (made positive semi-definite).
+/// `H = −½ (A_vv − A_00 I)`, symmetrized (a measurement far from the mode can make it
+/// indefinite; [`pinv`] of the sum with the prior's precision drops such directions).
 pub(super) fn evidence_precision(q: &[f64; 4], e: &Matrix4<f64>) -> Matrix3<f64> {
     let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
     let l = Matrix4::new(w, -x, -y, -z, x, w, -z, y, y, z, w, -x, z, -y, x, w);
     let a = l.transpose() * e * l;
     let h = -(a.fixed_view::<3, 3>(1, 1).into_owned() - Matrix3::identity() * a[(0, 0)]) * 0.5;
-    psd(&h)
+    (h + h.transpose()) * 0.5
 }
 
-/// The pseudo-inverse of a positive semi-definite `a` (eigenvalues below `1e-9` of the
-/// largest count as zero: unobserved directions).
+/// The pseudo-inverse of a symmetric `a` restricted to its positive part (eigenvalues below
+/// `1e-9` of the largest, and negative ones, count as zero: unobserved directions).
 pub(super) fn pinv(a: &Matrix3<f64>) -> Matrix3<f64> {
     let e = SymmetricEigen::new((a + a.transpose()) * 0.5);
     let top = e.eigenvalues.iter().fold(0.0f64, |m, &v| m.max(v));
@@ -172,10 +179,11 @@ pub(super) fn pinv(a: &Matrix3<f64>) -> Matrix3<f64> {
 /// (a Bingham distribution with this moment). Eigenvalues of `n` above 1 rad² are lowered to 1
 /// (a noise that wide is near uniform anyway), so the moment stays positive definite.
 pub(super) fn noise_moment(n: &Matrix3<f64>) -> Matrix4<f64> {
-    let e = SymmetricEigen::new(*n);
-    let n = if e.eigenvalues.iter().all(|&v| v <= 1.0) {
+    // a positive semi-definite n with trace ≤ 1 has every eigenvalue ≤ 1: no eigensolve
+    let n = if n.trace() <= 1.0 {
         *n
     } else {
+        let e = SymmetricEigen::new(*n);
         let l = e.eigenvalues.map(|v| v.clamp(0.0, 1.0));
         e.eigenvectors * Matrix3::from_diagonal(&l) * e.eigenvectors.transpose()
     };

@@ -620,15 +620,20 @@ fn correct(p: &AhrsParams, c: &Coeffs, core: &mut Core<4>, s: &mut SampleState) 
     let sigma_post = pinv(&(lam_prior + evidence_precision(&q_prior, &evidence)));
 
     // The bias from the move of the mode. Without a heading observation the mode may slide
-    // about the vertical (nearly equal concentrations): only the tilt part of the move counts.
-    let mut mu = Vector3::from(q4::to_rotation_vector(&q4::mul(
-        &q4::conj(&q_prior),
-        &q_post,
-    )));
-    if heading.is_none() {
-        let up_b = Vector3::from(q4::rotate_inverse(&q_prior, &UP));
-        mu -= up_b * up_b.dot(&mu);
-    }
+    // about the vertical (nearly equal concentrations: the heading is uniform, its mode
+    // arbitrary), so only the tilt part of the move counts, taken from the body-frame "up" of
+    // the two modes, which a slide leaves unchanged: `up_post ≈ up_prior + up_prior × μ`, so
+    // `μ_⊥ = up_post × up_prior`.
+    let mu = if heading.is_some() {
+        Vector3::from(q4::to_rotation_vector(&q4::mul(
+            &q4::conj(&q_prior),
+            &q_post,
+        )))
+    } else {
+        let up_prior = q4::rotate_inverse(&q_prior, &UP);
+        let up_post = q4::rotate_inverse(&q_post, &UP);
+        Vector3::from(cross3(&up_post, &up_prior))
+    };
     s.bias
         .correct(&lam_prior, &mu, &sigma_post, p.bias_time > 0.0);
     s.bias.clip(p.bias_max);
