@@ -18,6 +18,10 @@ pub(super) fn warmup(dt: f64, tau: f64) -> u32 {
 /// Time constant (s) of the low-pass filters of the rest detection.
 pub(super) const REST_FILTER_TIME: f64 = 0.5;
 
+/// Time constant (s) of the band limit of the samples the rest test compares with their
+/// low-pass values (a 50 Hz bandwidth, whatever the sample rate).
+pub(super) const REST_NOISE_TIME: f64 = 0.02;
+
 /// Time constant (s) with which a disturbed field's candidate reference follows it.
 pub(super) const CANDIDATE_TIME: f64 = 1.0;
 
@@ -25,6 +29,8 @@ pub(super) const CANDIDATE_TIME: f64 = 1.0;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Coeffs {
     pub(super) rest_filter: f64,
+    /// The coefficient of the band limit of the rest test's samples.
+    pub(super) rest_noise: f64,
     pub(super) rest_bias: f64,
     pub(super) mag_ref: f64,
     pub(super) candidate: f64,
@@ -57,6 +63,7 @@ impl Coeffs {
         let dt = p.sample_time;
         Coeffs {
             rest_filter: lp_coeff(dt, REST_FILTER_TIME),
+            rest_noise: lp_coeff(dt, REST_NOISE_TIME),
             rest_bias: lp_coeff(dt, p.rest_bias_time),
             mag_ref: lp_coeff(dt, p.mag_ref_time),
             candidate: lp_coeff(dt, CANDIDATE_TIME),

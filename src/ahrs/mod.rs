@@ -10,7 +10,8 @@
 //! # One sample (the per-sensor steps)
 //!
 //! 1. **Rest and the bias at rest.** The gyroscope and accelerometer are low-pass filtered;
-//!    while both stay within thresholds of their low-pass values for
+//!    while both (band-limited to 20 ms, so that the test sees the same noise at every sample
+//!    rate) stay within thresholds of their low-pass values for
 //!    [`AhrsParams::rest_time`], the low-passed rate is a direct measurement of the bias
 //!    (a fixed-gain Kalman step, time constant [`AhrsParams::rest_bias_time`]).
 //! 2. **Gyroscope.** The state is turned exactly by the body-frame increment of the
@@ -99,6 +100,9 @@ struct SampleState {
     bias: BiasState,
     gyr_lp: [f64; 3],
     acc_lp: [f64; 3],
+    /// The samples band-limited for the rest test (`REST_NOISE_TIME`).
+    gyr_fast: [f64; 3],
+    acc_fast: [f64; 3],
     rest_timer: f64,
     acc_filter: InertialLowPass,
     mag: Magnetic,
@@ -136,6 +140,8 @@ impl Ahrs {
                 bias: BiasState::new(params.bias_std),
                 gyr_lp: [0.0; 3],
                 acc_lp: [0.0; 3],
+                gyr_fast: [0.0; 3],
+                acc_fast: [0.0; 3],
                 rest_timer: 0.0,
                 acc_filter: InertialLowPass::new(coeffs.acc, coeffs.acc_warmup, &[0.0; 3]),
                 mag: Magnetic::new(),
@@ -430,6 +436,8 @@ impl Ahrs {
         self.filter = Some(f);
         self.s.gyr_lp = *gyr;
         self.s.acc_lp = *acc_raw;
+        self.s.gyr_fast = *gyr;
+        self.s.acc_fast = *acc_raw;
         self.s.rest_timer = 0.0;
         self.s.acc_filter = InertialLowPass::new(c.acc, c.acc_warmup, &acc);
         self.s.mag = mag_state;
@@ -509,18 +517,24 @@ fn step(
     let dt = p.sample_time;
 
     // 1. Rest detection and the bias at rest.
+    // The deviations are taken from the samples band-limited to REST_NOISE_TIME, so that the
+    // test sees the same noise at every sample rate (a raw sample's noise grows with √rate:
+    // at 1 kHz a MEMS gyroscope's alone exceeds the threshold now and then, and no rest lasts).
     let mut da = f64::INFINITY;
-    for (lp, x) in s.gyr_lp.iter_mut().zip(gyr) {
+    for ((lp, fast), x) in s.gyr_lp.iter_mut().zip(s.gyr_fast.iter_mut()).zip(gyr) {
         *lp += c.rest_filter * (x - *lp);
+        *fast += c.rest_noise * (x - *fast);
     }
     if let Some(a) = acc {
-        for (lp, x) in s.acc_lp.iter_mut().zip(a) {
+        for ((lp, fast), x) in s.acc_lp.iter_mut().zip(s.acc_fast.iter_mut()).zip(a) {
             *lp += c.rest_filter * (x - *lp);
+            *fast += c.rest_noise * (x - *fast);
         }
-        da = norm3(&[a[0] - s.acc_lp[0], a[1] - s.acc_lp[1], a[2] - s.acc_lp[2]]);
+        let (f, l) = (&s.acc_fast, &s.acc_lp);
+        da = norm3(&[f[0] - l[0], f[1] - l[1], f[2] - l[2]]);
     }
-    let g = &s.gyr_lp;
-    let dg = norm3(&[gyr[0] - g[0], gyr[1] - g[1], gyr[2] - g[2]]);
+    let (f, g) = (&s.gyr_fast, &s.gyr_lp);
+    let dg = norm3(&[f[0] - g[0], f[1] - g[1], f[2] - g[2]]);
     let still = dg < p.rest_gyro && da < p.rest_acc && norm3(g) < 2.0 * p.bias_max;
     s.rest_timer = if still { s.rest_timer + dt } else { 0.0 };
     if s.rest_timer >= p.rest_time {
