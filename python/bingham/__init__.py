@@ -16,7 +16,9 @@ Conventions (the same as in C and Rust):
 * ``z``: length d, any order and shift on input; outputs sorted ascending with ``z[-1] == 0``.
 * Quaternions are scalar first ``(w, x, y, z)``; complex numbers are ``(re, im)``. (Eigen's
   ``coeffs()``, ROS and SciPy's ``as_quat()`` are ``(x, y, z, w)``: reorder with
-  ``np.roll(q, 1)``.)
+  :func:`from_scipy` / :func:`to_scipy`, or SciPy ≥ 1.14's ``scalar_first=True``.)
+  :func:`quat_multiply`, :func:`quat_conjugate` and :func:`orientation_error` (total, heading
+  and inclination error as the BROAD benchmark defines them) work on ``(..., 4)`` arrays.
 
 Which library is loaded (:func:`library_path` tells): the file named by the environment variable
 ``BINGHAM_LIB`` if set (for developers: a freshly built ``target/release/libbingham.so``), else the
@@ -30,7 +32,8 @@ The package's modules, one subject each (everything public is re-exported here, 
 ``bingham``): ``_library`` loads the library and binds its functions, :mod:`bingham.errors`
 holds :class:`Status`, :class:`BinghamError` and the messages, ``_arrays`` converts arguments,
 :mod:`bingham.distribution` has the functions of ``(m, z)``, :mod:`bingham.filter` the
-:class:`Filter` (``_callback`` runs its Python callables), :mod:`bingham.ahrs` the :class:`Ahrs`.
+:class:`Filter` (``_callback`` runs its Python callables), :mod:`bingham.ahrs` the :class:`Ahrs`,
+:mod:`bingham.quaternion` the quaternion helpers (NumPy only, no library call).
 """
 
 from __future__ import annotations
@@ -73,6 +76,14 @@ from .distribution import (
     vector_observation,
 )
 from .filter import Filter
+from .quaternion import (
+    OrientationError,
+    from_scipy,
+    orientation_error,
+    quat_conjugate,
+    quat_multiply,
+    to_scipy,
+)
 
 __all__ = [
     "__version__",
@@ -113,6 +124,12 @@ __all__ = [
     "angular_spread",
     "AhrsParams",
     "Ahrs",
+    "quat_multiply",
+    "quat_conjugate",
+    "OrientationError",
+    "orientation_error",
+    "to_scipy",
+    "from_scipy",
 ]
 
 

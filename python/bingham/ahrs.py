@@ -4,6 +4,7 @@ accelerometer, optional magnetometer), and its parameters :class:`AhrsParams`.""
 from __future__ import annotations
 
 import ctypes
+import math
 from typing import Dict, Optional, Tuple, Union
 
 import numpy as np
@@ -20,8 +21,16 @@ LATENCY_ESTIMATE = -1.0
 
 
 class AhrsParams(ctypes.Structure):
-    """``bingham_ahrs_params`` (all angles in radians, times in seconds); build it with
-    :meth:`default`, which gives the tuned defaults. ``mag_latency`` / ``acc_latency`` (s, 0 to
+    """``bingham_ahrs_params`` (all angles in radians, times in seconds).
+
+    Build it in one of two ways, both starting from the library's tuned defaults for the sample
+    time: :meth:`default` (``AhrsParams.default(0.01)``), or keywords naming ``sample_time`` and
+    the fields to change (``AhrsParams(sample_time=0.01, acc_noise=0.8)``). Positional
+    arguments, a missing ``sample_time`` or an unknown field name raise :class:`TypeError` (a
+    structure of zeros is not a valid parameter set). :meth:`copy` gives an independent copy;
+    :class:`Ahrs` never modifies the instance it is given.
+
+    ``mag_latency`` / ``acc_latency`` (s, 0 to
     0.5, default 0): the magnetometer's / accelerometer's latency behind the gyroscope, each
     sample turned forward by the rate over it (see :meth:`Ahrs.mag_latency_estimate`).
     ``bias_std`` (rad/s, > 0, default 0.5°/s): the initial standard deviation per axis of the
@@ -56,16 +65,58 @@ class AhrsParams(ctypes.Structure):
         ("gyro_scale_noise", ctypes.c_double),
     ]
 
+    def __init__(self, *args: object, **fields: float) -> None:
+        if args:
+            raise TypeError(
+                "AhrsParams takes no positional arguments: use AhrsParams.default(sample_time) "
+                "or keywords, e.g. AhrsParams(sample_time=0.01, acc_noise=0.8)"
+            )
+        if "sample_time" not in fields:
+            raise TypeError(
+                "AhrsParams needs sample_time (seconds), the other fields start from its defaults: "
+                "use AhrsParams.default(sample_time) or AhrsParams(sample_time=0.01, acc_noise=0.8)"
+            )
+        _known_fields(fields)
+        ctypes.Structure.__init__(self)
+        _check(lib().bingham_ahrs_params_default(float(fields["sample_time"]), ctypes.byref(self)))
+        for name, value in fields.items():
+            if name != "sample_time":
+                setattr(self, name, float(value))
+
     @classmethod
     def default(cls, sample_time: float) -> "AhrsParams":
         """The library's tuned defaults for the sample time ``sample_time`` (seconds)."""
-        p = cls()
-        _check(lib().bingham_ahrs_params_default(float(sample_time), ctypes.byref(p)))
-        return p
+        return cls(sample_time=sample_time)
+
+    def copy(self) -> "AhrsParams":
+        """An independent copy (changing one does not change the other)."""
+        return type(self).from_buffer_copy(self)
+
+    def __repr__(self) -> str:
+        body = ", ".join(f"{k}={v!r}" for k, v in self.as_dict().items())
+        return f"{type(self).__name__}({body})"
 
     def as_dict(self) -> Dict[str, float]:
         """The parameters as a ``{name: value}`` dictionary."""
         return {name: getattr(self, name) for name, *_ in self._fields_}
+
+
+_FIELD_NAMES: Tuple[str, ...] = tuple(f[0] for f in AhrsParams._fields_)
+
+
+
+def _known_fields(names: Dict[str, float]) -> None:
+    unknown = sorted(set(names) - set(_FIELD_NAMES))
+    if unknown:
+        raise TypeError(
+            f"unknown AHRS parameter(s) {', '.join(map(repr, unknown))}; "
+            f"valid: {', '.join(_FIELD_NAMES)}"
+        )
+
+
+# The largest ``sample_time`` (seconds) :class:`Ahrs` accepts: a larger value is almost surely a
+# rate in Hz (the C library itself accepts up to 1e3 s).
+_MAX_SAMPLE_TIME = 1.0
 
 
 def _rows3(a: ArrayLike, name: str, n: Optional[int] = None) -> Array:
@@ -81,20 +132,59 @@ class Ahrs:
     ``bingham_ahrs`` handle. Orientation q (w, x, y, z) maps sensor to world ENU.
     Units: rad/s, m/s² (+g up at rest), any magnetometer unit.
 
-    ``Ahrs(sample_time)`` uses the tuned defaults; pass ``params=`` (an :class:`AhrsParams`)
-    or keyword overrides (``Ahrs(0.01, acc_noise=0.8)``) to change them.
+    ``Ahrs(sample_time)`` uses the tuned defaults for the sample time (seconds, the period,
+    not the rate: ``Ahrs(0.01)`` or ``Ahrs.from_rate(100)`` for 100 Hz); pass ``params=`` (an
+    :class:`AhrsParams`) and/or keyword overrides (``Ahrs(0.01, acc_noise=0.8)``) to change
+    them. ``params`` is copied, never modified (the overrides go to the copy, kept as
+    ``self.params``), and its ``sample_time`` must equal ``sample_time`` (else
+    :class:`ValueError`). A ``sample_time`` above 1 s raises :class:`ValueError` ("did you pass
+    a rate in Hz?"): the Python binding's bound, the C library accepts up to 1e3 s. An unknown
+    override raises :class:`TypeError`, a value the library refuses :class:`BinghamError`.
     """
 
     def __init__(self, sample_time: float, params: Optional[AhrsParams] = None, **overrides: float) -> None:
-        p = AhrsParams.default(sample_time) if params is None else params
+        sample_time = float(sample_time)
+        if math.isfinite(sample_time) and sample_time > _MAX_SAMPLE_TIME:
+            raise ValueError(
+                f"sample_time = {sample_time:g} s: did you pass a rate in Hz? "
+                f"use Ahrs.from_rate({sample_time:g}) (sample_time is the period in seconds, "
+                f"at most {_MAX_SAMPLE_TIME:g} s)"
+            )
+        if params is None:
+            p = AhrsParams.default(sample_time)
+        else:
+            if not isinstance(params, AhrsParams):
+                raise TypeError(f"params must be an AhrsParams, got {type(params).__name__}")
+            if params.sample_time != sample_time:
+                raise ValueError(
+                    f"sample_time = {sample_time!r} s (the first argument) differs from "
+                    f"params.sample_time = {params.sample_time!r} s: pass the same value, e.g. "
+                    f"Ahrs(p.sample_time, params=p), or build p for this sample time"
+                )
+            p = params.copy()
+        _known_fields(overrides)
         for k, v in overrides.items():
-            if k not in p.as_dict():
-                raise TypeError(f"unknown AHRS parameter {k!r}")
             setattr(p, k, float(v))
         handle = ctypes.c_void_p()
         _check(lib().bingham_ahrs_new(ctypes.byref(p), ctypes.byref(handle)))
         self._handle: Optional[ctypes.c_void_p] = handle
+        #: The parameters in use (a copy: changing it does not change this AHRS).
         self.params = p
+
+    @classmethod
+    def from_rate(cls, hz: float, **overrides: float) -> "Ahrs":
+        """The AHRS for a sample rate of ``hz`` (samples per second): ``Ahrs(1 / hz,
+        **overrides)``. ``hz`` must be finite and at least 1 (the sample time at most 1 s),
+        else :class:`ValueError`."""
+        hz = float(hz)
+        if not math.isfinite(hz) or hz <= 0.0:
+            raise ValueError(f"the sample rate must be finite and > 0 Hz, got {hz!r}")
+        if 1.0 / hz > _MAX_SAMPLE_TIME:
+            raise ValueError(
+                f"the sample rate {hz:g} Hz is below {1.0 / _MAX_SAMPLE_TIME:g} Hz "
+                f"(a sample time above {_MAX_SAMPLE_TIME:g} s)"
+            )
+        return cls(1.0 / hz, None, **overrides)
 
     def close(self) -> None:
         """Releases the handle (idempotent)."""
