@@ -290,8 +290,9 @@ typedef int (*bingham_log_likelihood_fn)(const double *x, double *log_l, void *u
 
 /**
  * Parameters of the AHRS (`bingham_ahrs_params` in C, `AhrsParams` in Rust). The defaults —
- * `bingham_ahrs_params_default()` in C, `AhrsParams::new(sample_time)` in Rust — are the tuned
- * set: tuned once on the nine BROAD trials, one set for all recordings. Angles in radians,
+ * `bingham_ahrs_params_default()` in C, `AhrsParams::new(sample_time)` in Rust — are one set
+ * for all recordings and sample rates, tuned on the nine BROAD trials and a simulated IMU
+ * suite; docs/guide.md ("The defaults and why") gives the mechanism behind each value. Angles in radians,
  * times in seconds. Fill it with the defaults, then change fields if needed.
  */
 typedef struct bingham_ahrs_params {
