@@ -841,6 +841,35 @@ static void test_last_error_message(void) {
     CHECK(len == full);
 }
 
+/* The first unread error is kept: an unchecked failure followed by another failure leaves a
+ * message that names both (the newest first); a read (len > 0) resets this. */
+static void test_first_unread_error(void) {
+    char buf[1024];
+    size_t len = 0;
+    CHECK_OK(bingham_last_error_message(buf, sizeof buf, &len)); /* read: start clean */
+    bingham_ahrs_params p;
+    CHECK_OK(bingham_ahrs_params_default(0.01, &p));
+    p.gyro_noise = -1.0;
+    bingham_ahrs *a = NULL;
+    /* the caller does not check this status ... */
+    (void)bingham_ahrs_new(&p, &a);
+    CHECK(a == NULL);
+    /* ... and the next call fails because of it */
+    double q[4];
+    CHECK_STATUS(bingham_ahrs_quaternion(a, q), BINGHAM_ERR_NULL_ARGUMENT);
+    size_t full = 0;
+    CHECK_OK(bingham_last_error_message(NULL, 0, &full)); /* a length query is not a read */
+    CHECK_OK(bingham_last_error_message(buf, sizeof buf, &len));
+    CHECK(len == full && full < sizeof buf);
+    CHECK(strncmp(buf, "bingham_ahrs_quaternion: ", 25) == 0);
+    CHECK(strstr(buf, "[the first error since the message was last read: bingham_ahrs_new: ") != NULL);
+    CHECK(strstr(buf, "gyro_noise") != NULL);
+    /* after the read, the next failure stands alone */
+    CHECK_STATUS(bingham_ahrs_quaternion(a, q), BINGHAM_ERR_NULL_ARGUMENT);
+    CHECK_OK(bingham_last_error_message(buf, sizeof buf, &len));
+    CHECK(strstr(buf, "first error") == NULL && strstr(buf, "gyro_noise") == NULL);
+}
+
 static void *thread_body(void *arg) {
     int which = *(int *)arg;
     double f;
@@ -910,6 +939,7 @@ int main(void) {
     test_deterministic_samples();
     test_nonlinear_filter();
     test_last_error_message();
+    test_first_unread_error();
     test_threads();
     test_status_strings_and_version();
     return check_summary("api_errors");

@@ -452,6 +452,12 @@ const char *bingham_status_str(int status);
  * empty string. This function never changes the stored message. Each thread has its own
  * message; no locking is involved.
  *
+ * **The cause is not lost.** If calls failed since the message was last read (a read is a
+ * call with `len > 0`), the message is the newest one followed by
+ * `" [the first error since the message was last read: <its message>]"` — e.g. a failed
+ * `bingham_ahrs_new` that went unchecked, then the next call's "`a` is NULL": the message
+ * names both. Reading resets this: the next failure's message stands alone.
+ *
  * - `out_len` (may be `NULL`): receives the full length of the message in bytes, without the
  *   terminating NUL, whether or not it fits.
  * - `buf`, `len`: when `len > 0`, at most `len - 1` bytes of the message are copied to `buf`

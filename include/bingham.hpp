@@ -910,7 +910,10 @@ public:
         require("bingham::Ahrs::mag_latency_estimate");
         double l = 0.0;
         const bingham_status st = bingham_ahrs_mag_latency_estimate(a_, &l);
-        if (st == BINGHAM_ERR_NOT_CONVERGED) return std::nullopt;
+        if (st == BINGHAM_ERR_NOT_CONVERGED) {
+            (void)last_error_message();  // handled here: read, so it is not reported as unread later
+            return std::nullopt;
+        }
         detail::check(st);
         return l;
     }

@@ -10,7 +10,7 @@ from typing import Dict, Optional, Tuple, Union
 import numpy as np
 
 from ._arrays import Array, ArrayLike, _in, _ptr
-from .errors import Status, _check
+from .errors import Status, _check, last_error_message
 from ._library import lib
 
 __all__ = ["AhrsParams", "Ahrs", "LATENCY_ESTIMATE"]
@@ -291,6 +291,7 @@ class Ahrs:
         out = np.empty(1)
         st = lib().bingham_ahrs_mag_latency_estimate(self._h(), _ptr(out))
         if st == Status.ERR_NOT_CONVERGED:
+            last_error_message()  # handled here: read, so it is not reported as unread later
             return None
         _check(st)
         return float(out[0])

@@ -103,3 +103,14 @@ def test_latency_parameters_and_readout():
     comp, _, _ = run(sim, mag_latency=0.01)
     assert abs(plain.mag_latency_estimate() - comp.mag_latency_estimate()) < 2e-4
     np.testing.assert_allclose(plain.mag_latency_estimate(), 0.01, atol=1e-3)
+
+
+def test_a_handled_missing_estimate_is_not_reported_later():
+    # None is an answer, not an error: the library's NOT_CONVERGED message is read (consumed),
+    # so a later failure's message does not carry it as "the first error since last read"
+    a = bh.Ahrs(0.01)
+    assert a.mag_latency_estimate() is None
+    with pytest.raises(bh.BinghamError) as e:
+        a.update([float("nan"), 0.0, 0.0], [0.0, 0.0, 9.81])
+    assert "gyr[0]" in e.value.message
+    assert "first error since" not in e.value.message

@@ -11,11 +11,26 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use super::status::bingham_status;
 use crate::error::{check_dim, Error};
 
-thread_local! {
-    /// The message of the most recent failed call on this thread (empty: none yet).
-    /// The only mutable state of the library; one per thread, so no locking.
-    static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
+/// The last error of a thread: the message callers read, and the first error since the message
+/// was last read (so that a caller who does not check every status still finds the cause).
+struct LastError {
+    message: String,
+    first_unread: Option<String>,
 }
+
+thread_local! {
+    /// The most recent failed call on this thread (empty message: none yet).
+    /// The only mutable state of the library; one per thread, so no locking.
+    static LAST_ERROR: RefCell<LastError> = const {
+        RefCell::new(LastError {
+            message: String::new(),
+            first_unread: None,
+        })
+    };
+}
+
+/// What follows the newest message when earlier errors were not read.
+const FIRST_UNREAD: &str = " [the first error since the message was last read: ";
 
 /// An error on its way to C: the status to return and the message to store.
 #[derive(Debug, Clone, PartialEq)]
@@ -66,7 +81,13 @@ fn set_last_error(message: String) {
     // `try_with`: during thread teardown the slot may be gone; then the message is dropped.
     let _ = LAST_ERROR.try_with(|slot| {
         if let Ok(mut s) = slot.try_borrow_mut() {
-            *s = message;
+            match &s.first_unread {
+                Some(first) => s.message = format!("{message}{FIRST_UNREAD}{first}]"),
+                None => {
+                    s.first_unread = Some(message.clone());
+                    s.message = message;
+                }
+            }
         }
     });
 }
@@ -253,6 +274,12 @@ pub(crate) unsafe fn free_handle<T>(p: *mut T) {
 /// empty string. This function never changes the stored message. Each thread has its own
 /// message; no locking is involved.
 ///
+/// **The cause is not lost.** If calls failed since the message was last read (a read is a
+/// call with `len > 0`), the message is the newest one followed by
+/// `" [the first error since the message was last read: <its message>]"` — e.g. a failed
+/// `bingham_ahrs_new` that went unchecked, then the next call's "`a` is NULL": the message
+/// names both. Reading resets this: the next failure's message stands alone.
+///
 /// - `out_len` (may be `NULL`): receives the full length of the message in bytes, without the
 ///   terminating NUL, whether or not it fits.
 /// - `buf`, `len`: when `len > 0`, at most `len - 1` bytes of the message are copied to `buf`
@@ -298,9 +325,17 @@ pub unsafe extern "C" fn bingham_last_error_message(
                 unsafe { *out_len = message.len() };
             }
         };
-        match LAST_ERROR.try_with(|slot| copy(&slot.borrow())) {
-            Ok(()) => {}
+        let read = LAST_ERROR.try_with(|slot| match slot.try_borrow_mut() {
+            Ok(mut s) => {
+                copy(&s.message);
+                if len > 0 {
+                    s.first_unread = None;
+                }
+            }
             Err(_) => copy(""),
+        });
+        if read.is_err() {
+            copy("");
         }
         bingham_status::BINGHAM_OK
     }));
@@ -342,9 +377,11 @@ mod tests {
         });
         std::panic::set_hook(prev);
         assert_eq!(st2, BINGHAM_ERR_PANIC);
+        // two failures without a read in between: the newest, then the first
         assert_eq!(
             last(),
-            "bingham_test2: internal error (panic): (no message)"
+            "bingham_test2: internal error (panic): (no message) [the first error since the \
+             message was last read: bingham_test: internal error (panic): boom 42]"
         );
         assert_eq!(st, BINGHAM_ERR_PANIC);
         let st = guard("bingham_test", || {
@@ -372,6 +409,35 @@ mod tests {
         });
         assert_eq!(st, BINGHAM_ERR_NOT_CONVERGED);
         assert_eq!(last(), "bingham_h: not converged: slow");
+    }
+
+    #[test]
+    fn the_first_unread_error_is_kept_with_the_newest() {
+        let _ = guard("bingham_new", || {
+            Err(Failure::argument("`gyro_noise` must be > 0"))
+        });
+        let _ = guard("bingham_use", || Err(Failure::null("a")));
+        let _ = guard("bingham_use", || Err(Failure::null("b")));
+        // the length query does not count as a read
+        let mut n = 0usize;
+        // SAFETY: len == 0 with a NULL buffer is the documented length query.
+        let st = unsafe { bingham_last_error_message(std::ptr::null_mut(), 0, &mut n) };
+        assert_eq!(st, BINGHAM_OK);
+        let m = last();
+        assert_eq!(m.len(), n);
+        assert_eq!(
+            m,
+            "bingham_use: `b` is NULL [the first error since the message was last read: \
+             bingham_new: `gyro_noise` must be > 0]"
+        );
+        // read: the next failure stands alone
+        let _ = guard("bingham_use", || Err(Failure::null("c")));
+        assert_eq!(last(), "bingham_use: `c` is NULL");
+        assert_eq!(
+            last(),
+            "bingham_use: `c` is NULL",
+            "reading never changes it"
+        );
     }
 
     #[test]
