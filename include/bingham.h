@@ -121,7 +121,7 @@
 
 /**
  * The smallest process noise per step (rad) the AHRS accepts (`gyro_noise·√sample_time`): below
- * it the noise's concentration leaves the moment matching's range.
+ * it the state's concentrations could grow past what the moment matching resolves.
  */
 #define BINGHAM_AHRS_MIN_STEP_NOISE 1e-6
 

@@ -230,6 +230,52 @@ pub mod q4 {
         let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
         [q[0] / n, q[1] / n, q[2] / n, q[3] / n]
     }
+
+    /// The rotation matrix `R(q)` of a unit quaternion (row-major, `v_world = R v_body`); the
+    /// inverse of [`from_matrix`].
+    pub fn to_matrix(q: &[f64; 4]) -> [[f64; 3]; 3] {
+        let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
+        [
+            [
+                1.0 - 2.0 * (y * y + z * z),
+                2.0 * (x * y - w * z),
+                2.0 * (x * z + w * y),
+            ],
+            [
+                2.0 * (x * y + w * z),
+                1.0 - 2.0 * (x * x + z * z),
+                2.0 * (y * z - w * x),
+            ],
+            [
+                2.0 * (x * z - w * y),
+                2.0 * (y * z + w * x),
+                1.0 - 2.0 * (x * x + y * y),
+            ],
+        ]
+    }
+}
+
+#[cfg(test)]
+mod q4_matrix_tests {
+    use super::q4;
+
+    #[test]
+    fn to_matrix_is_rotate_and_from_matrix_inverts_it() {
+        for v in [[0.3, -0.2, 0.5], [2.9, 0.1, -0.4], [0.0, 0.0, 3.1]] {
+            let q = q4::from_rotation_vector(&v);
+            let r = q4::to_matrix(&q);
+            for e in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.2, -0.7, 0.4]] {
+                let want = q4::rotate(&q, &e);
+                for i in 0..3 {
+                    let got = r[i][0] * e[0] + r[i][1] * e[1] + r[i][2] * e[2];
+                    assert!((got - want[i]).abs() < 1e-15);
+                }
+            }
+            let back = q4::from_matrix(&r);
+            let d: f64 = back.iter().zip(&q).map(|(a, b)| a * b).sum();
+            assert!((d.abs() - 1.0).abs() < 1e-14);
+        }
+    }
 }
 
 #[cfg(test)]

@@ -197,22 +197,6 @@ pub(super) fn noise_moment(n: &Matrix3<f64>) -> Matrix4<f64> {
     s
 }
 
-/// The rotation matrix of the unit quaternion `q` (`v_world = R v_body`).
-pub(super) fn rotation_matrix(q: &[f64; 4]) -> Matrix3<f64> {
-    let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
-    Matrix3::new(
-        1.0 - 2.0 * (y * y + z * z),
-        2.0 * (x * y - w * z),
-        2.0 * (x * z + w * y),
-        2.0 * (x * y + w * z),
-        1.0 - 2.0 * (x * x + z * z),
-        2.0 * (y * z - w * x),
-        2.0 * (x * z - w * y),
-        2.0 * (y * z + w * x),
-        1.0 - 2.0 * (x * x + y * y),
-    )
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -70,7 +70,7 @@ mod magnetic;
 mod params;
 mod vec3;
 
-use bias::{evidence_precision, noise_moment, pinv, precision, rotation_matrix, BiasState};
+use bias::{evidence_precision, noise_moment, pinv, precision, BiasState};
 use latency::{turn_forward, LatencyEstimator};
 pub use lowpass::CORRECTION_PERIOD;
 use lowpass::{Coeffs, InertialLowPass, REST_FILTER_TIME};
@@ -562,7 +562,9 @@ fn step(
     } else {
         0.0
     };
-    s.bias.predict(&rotation_matrix(&dq), dt, q, drift);
+    let r = q4::to_matrix(&dq);
+    s.bias
+        .predict(&Matrix3::from_fn(|i, j| r[i][j]), dt, q, drift);
     // the estimate is clipped to ±bias_max: its variance need not grow beyond (2·bias_max)²
     let cap = 3.0 * 4.0 * p.bias_max * p.bias_max;
     if s.bias.p.trace() > cap {

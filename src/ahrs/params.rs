@@ -9,7 +9,7 @@ pub const MIN_SAMPLE_TIME: f64 = 1e-6;
 pub const MAX_SAMPLE_TIME: f64 = 1e3;
 
 /// The smallest process noise per step (rad) the AHRS accepts (`gyro_noise·√sample_time`): below
-/// it the noise's concentration leaves the moment matching's range.
+/// it the state's concentrations could grow past what the moment matching resolves.
 pub const MIN_STEP_NOISE: f64 = 1e-6;
 
 /// The largest sensor latency (s) the AHRS accepts for `mag_latency` and `acc_latency`
