@@ -347,7 +347,9 @@ static void test_predict_identity_and_rotation(int d) {
         Ctx c = make_ctx(d, T_IDENTITY, -1);
         CHECK_OK(bingham_filter_predict_nonlinear(a, transition_cb, &c, mwr.data(), zw.data()));
         CHECK_OK(bingham_filter_predict(b, mwr.data(), zw.data()));
-        CHECK(c.calls == expect_calls && c.bad_inputs == 0);
+        // the fallback set embeds no lower rule: a second one of its degree estimates the error
+        const int expect_total = pts.reproduced == 4 ? expect_calls : 2 * expect_calls;
+        CHECK(c.calls == expect_total && c.bad_inputs == 0);
         State sa = get_state(a, d), sb = get_state(b, d);
         double ez = z_rel(sa.z, sb.z), em = mode_angle(sa.m, sb.m);
         CHECK(ez < 1e-9);
@@ -362,7 +364,7 @@ static void test_predict_identity_and_rotation(int d) {
         c.u = random_unit(rng, d);
         CHECK_OK(bingham_filter_predict_nonlinear(a, transition_cb, &c, mwr.data(), zw.data()));
         CHECK_OK(bingham_filter_predict_rotation(b, c.u.data(), mwr.data(), zw.data()));
-        CHECK(c.calls == expect_calls);
+        CHECK(c.calls == expect_total);
         sa = get_state(a, d);
         sb = get_state(b, d);
         ez = z_rel(sa.z, sb.z);
@@ -422,7 +424,7 @@ static void test_failing_callbacks(int d) {
         Ctx c = make_ctx(d, L_BINGHAM, -1);
         c.P = ml * zl.asDiagonal() * ml.transpose();
         CHECK_OK(bingham_filter_update_nonlinear(probe, log_likelihood_cb, &c));
-        CHECK(c.calls >= n && c.calls % n == 0 && c.bad_inputs == 0);  // whole rounds over the samples
+        CHECK(c.calls >= n && c.bad_inputs == 0);  // rounds over the samples, then the sampled check
         total = c.calls;
         bingham_filter_free(probe);
     }

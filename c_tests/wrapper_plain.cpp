@@ -392,6 +392,35 @@ static void test_filter_nonlinear() {
         callback_error = e.status() == BINGHAM_ERR_CALLBACK;
     }
     CHECK(callback_error && same(f.state(), before));
+
+    // The options forms: the report, and a budget too small refused with the filter unchanged.
+    bingham::NonlinearOptions o;
+    int n = 0;
+    const bingham::NonlinearReport rp = f.predict_nonlinear(
+        [&](const double *x, double *out) {
+            ++n;
+            c_turn(x, out, nullptr);
+        },
+        w, o);
+    CHECK(rp.method == BINGHAM_NONLINEAR_DETERMINISTIC && rp.calls == (std::size_t)n && n == 19);
+    n = 0;
+    const bingham::NonlinearReport ru = f.update_nonlinear(
+        [&](const double *x) {
+            ++n;
+            return quartic(x);
+        },
+        o);
+    CHECK(ru.method == BINGHAM_NONLINEAR_SAMPLED && ru.calls == (std::size_t)n);
+    CHECK(ru.error_estimate <= BINGHAM_NONLINEAR_UPDATE_TOLERANCE && ru.samples >= 128);
+    const Distribution kept = f.state();
+    o.max_calls = 30;
+    bool refused = false;
+    try {
+        f.update_nonlinear([](const double *x) { return quartic(x); }, o);
+    } catch (const bingham::Error &e) {
+        refused = e.status() == BINGHAM_ERR_NOT_CONVERGED && std::strstr(e.what(), "budget") != nullptr;
+    }
+    CHECK(refused && same(f.state(), kept));
     bingham_filter_free(c);
 }
 

@@ -110,6 +110,28 @@
 #define BINGHAM_FILTER_MAX_CONCENTRATION 1e10
 
 /**
+ * `bingham_nonlinear_report.method`: the deterministic points alone (prediction only: their
+ * embedded error estimate was below a tenth of the tolerance).
+ */
+#define BINGHAM_NONLINEAR_DETERMINISTIC 0
+
+/**
+ * `bingham_nonlinear_report.method`: randomized quasi-Monte Carlo over the deterministic
+ * result's envelope (the update always; the prediction where the points' estimate asks).
+ */
+#define BINGHAM_NONLINEAR_SAMPLED 1
+
+/**
+ * The prediction's default tolerance (see `bingham_nonlinear_options.tolerance`).
+ */
+#define BINGHAM_NONLINEAR_PREDICT_TOLERANCE 5e-4
+
+/**
+ * The update's default tolerance (see `bingham_nonlinear_options.tolerance`).
+ */
+#define BINGHAM_NONLINEAR_UPDATE_TOLERANCE 2.5e-3
+
+/**
  * The smallest sampling period (s) the AHRS accepts.
  */
 #define BINGHAM_AHRS_MIN_SAMPLE_TIME 1e-6
@@ -287,6 +309,67 @@ typedef int (*bingham_transition_fn)(const double *x_in, double *x_out, void *us
  * filter handle.
  */
 typedef int (*bingham_log_likelihood_fn)(const double *x, double *log_l, void *user_data);
+
+/**
+ * How `bingham_filter_predict_nonlinear_opts()` and `bingham_filter_update_nonlinear_opts()`
+ * control their error. Fill it with `bingham_nonlinear_options_default()` and change what you
+ * need; `NULL` options mean the defaults.
+ */
+typedef struct bingham_nonlinear_options {
+    /**
+     * The largest accepted error estimate (absolute) of any entry of the result's second
+     * moment `E[x xᵀ]` (entries lie in [−1, 1]; for the prediction, before the noise is
+     * composed in). Finite and ≥ 0; 0 (the default) means the step's own default: 5e-4 for the
+     * prediction, 2.5e-3 for the update (`BINGHAM_NONLINEAR_PREDICT_TOLERANCE`,
+     * `BINGHAM_NONLINEAR_UPDATE_TOLERANCE`; their reasons in `docs/guide.md`).
+     */
+    double tolerance;
+    /**
+     * Update only: the largest accepted error estimate of the posterior mode as a fraction of
+     * the posterior's spread `sqrt(1 − largest eigenvalue of E[x xᵀ])` (both as chords between
+     * unit vectors). Positive and finite; default 0.05.
+     */
+    double mode_tolerance;
+    /**
+     * The most callback calls the step may make (≥ 1); a step that would need more is refused
+     * with `BINGHAM_ERR_NOT_CONVERGED`. Default 20000.
+     */
+    size_t max_calls;
+} bingham_nonlinear_options;
+
+/**
+ * What a nonlinear step measured (written only on success).
+ */
+typedef struct bingham_nonlinear_report {
+    /**
+     * Callback calls made.
+     */
+    size_t calls;
+    /**
+     * The error estimate (absolute) of the result's second moment, largest entry: 3 standard
+     * errors from 16 independent randomizations (sampled), or the embedded rule's difference
+     * (deterministic). At most the tolerance.
+     */
+    double error_estimate;
+    /**
+     * Update: the error estimate of the mode as a fraction of the posterior's spread (at most
+     * the mode tolerance); prediction: 0 (not estimated).
+     */
+    double mode_error_estimate;
+    /**
+     * `BINGHAM_NONLINEAR_DETERMINISTIC` or `BINGHAM_NONLINEAR_SAMPLED`.
+     */
+    int method;
+    /**
+     * Sampled points behind the result (0 when deterministic).
+     */
+    size_t samples;
+    /**
+     * The effective sample share `(Σw)² / (n Σw²)` of the final importance weights, in (0, 1]
+     * (1 when nothing was sampled).
+     */
+    double effective_share;
+} bingham_nonlinear_report;
 
 /**
  * Parameters of the AHRS (`bingham_ahrs_params` in C, `AhrsParams` in Rust). The defaults —
@@ -1232,6 +1315,20 @@ enum bingham_status bingham_filter_log_likelihood_vector(const struct bingham_fi
                                                          double *out);
 
 /**
+ * The angular spread (radians) of the filter's state, as `bingham_angular_spread()`:
+ * `spread[i]` (i < d − 1) along principal direction i (column i of the state's M),
+ * `spread[d-1]` the total (d = 4: the RMS of `2 sin(θ/2)`, θ the rotation angle from the mode,
+ * ≈ the RMS angle).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `spread`), `BINGHAM_ERR_NUMERICAL` (the moments
+ * of an extremely concentrated state cannot be evaluated). On error nothing is written.
+ *
+ * # Safety
+ * `f`: a live handle; `spread`: d writable doubles.
+ */
+enum bingham_status bingham_filter_angular_spread(const struct bingham_filter *f, double *spread);
+
+/**
  * Nonlinear prediction step: the state becomes the distribution of `a(x) (+) w`,
  * `w ~ Bingham(m_w, z_w)`, for a transition function `a` given as a C callback.
  *
@@ -1308,18 +1405,86 @@ enum bingham_status bingham_filter_update_nonlinear(struct bingham_filter *f,
                                                     void *user_data);
 
 /**
- * The angular spread (radians) of the filter's state, as `bingham_angular_spread()`:
- * `spread[i]` (i < d − 1) along principal direction i (column i of the state's M),
- * `spread[d-1]` the total (d = 4: the RMS of `2 sin(θ/2)`, θ the rotation angle from the mode,
- * ≈ the RMS angle).
+ * Fills `*opts` with the defaults: `tolerance` 0 (the step's default), `mode_tolerance`
+ * 0.05, `max_calls` 20000.
  *
- * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `spread`), `BINGHAM_ERR_NUMERICAL` (the moments
- * of an extremely concentrated state cannot be evaluated). On error nothing is written.
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`opts`).
  *
  * # Safety
- * `f`: a live handle; `spread`: d writable doubles.
+ * `opts`: a writable `bingham_nonlinear_options`.
  */
-enum bingham_status bingham_filter_angular_spread(const struct bingham_filter *f, double *spread);
+enum bingham_status bingham_nonlinear_options_default(struct bingham_nonlinear_options *opts);
+
+/**
+ * `bingham_filter_predict_nonlinear()` with its error controlled by `opts` and what it
+ * measured written to `report`.
+ *
+ * The predicted second moment `E[a(x) a(x)ᵀ]` is formed from the deterministic points (19
+ * for d = 4, 3 for d = 2) with an error estimate from the second-moment rule embedded in the
+ * same points; a model the points integrate exactly (the identity, a rotation) costs nothing
+ * more. Where the estimate is above a tenth of the tolerance, the moment is computed by
+ * randomized quasi-Monte Carlo over the state (16 independently shifted Sobol nets mapped to
+ * the state's angular central Gaussian envelope, 8 points each at first, doubled until 3
+ * standard errors meet the tolerance), with the fourth-degree monomials of the state's
+ * principal coordinates as control variates (their expectations are exact, so only what the
+ * 19 points miss is sampled). Beyond `opts->max_calls` calls the prediction is refused with
+ * `BINGHAM_ERR_NOT_CONVERGED` and a message that gives the estimate reached; the filter is
+ * then unchanged. Figures: `docs/accuracy.md` (nonlinear models).
+ *
+ * - `opts`: the tolerance and the budget (`NULL`: the defaults).
+ * - `report`: receives what was measured (`NULL`: not wanted); written only on success.
+ *
+ * Errors: those of `bingham_filter_predict_nonlinear()`; `BINGHAM_ERR_INVALID_ARGUMENT` (an
+ * option out of range); `BINGHAM_ERR_NOT_CONVERGED` (the tolerance was not met within the
+ * budget). The arguments (options included) are checked before `fn` is first called.
+ *
+ * # Safety
+ * As for `bingham_filter_predict_nonlinear()`; `opts`: `NULL` or a readable
+ * `bingham_nonlinear_options`; `report`: `NULL` or a writable `bingham_nonlinear_report`.
+ */
+enum bingham_status bingham_filter_predict_nonlinear_opts(struct bingham_filter *f,
+                                                          bingham_transition_fn fn,
+                                                          void *user_data,
+                                                          const double *m_w,
+                                                          const double *z_w,
+                                                          const struct bingham_nonlinear_options *opts,
+                                                          struct bingham_nonlinear_report *report);
+
+/**
+ * `bingham_filter_update_nonlinear()` with its error controlled by `opts` and what it measured
+ * written to `report`.
+ *
+ * The deterministic approximation of the posterior (tempering and importance correction, see
+ * `bingham_filter_update_nonlinear()`) is checked and corrected by randomized quasi-Monte Carlo
+ * importance sampling around it: 16 independently shifted Sobol nets mapped to the
+ * approximation's angular central Gaussian envelope, 8 points each at first, weighted by
+ * `prior · L / envelope`, with the approximation's own weights on the same points as a control
+ * variate (the correction is exactly 0 where the approximation is the posterior: a Bingham
+ * likelihood stays exact). The points are doubled until 3 standard errors of every entry of the
+ * second moment meet the tolerance and those of the mode meet `mode_tolerance` spreads; where
+ * the correction is large the envelope is moved to the corrected estimate first. Beyond
+ * `opts->max_calls` calls (the deterministic part's included) the update is refused with
+ * `BINGHAM_ERR_NOT_CONVERGED` and a message giving the estimates reached; the filter is then
+ * unchanged. Multimodal posteriors: the sampling sees the mode(s) the envelope covers; a
+ * separate mode far from the prior's bulk may be missed (see `docs/guide.md`). Figures:
+ * `docs/accuracy.md` (nonlinear models).
+ *
+ * - `opts`: the tolerances and the budget (`NULL`: the defaults).
+ * - `report`: receives what was measured (`NULL`: not wanted); written only on success.
+ *
+ * Errors: those of `bingham_filter_update_nonlinear()`; `BINGHAM_ERR_INVALID_ARGUMENT` (an
+ * option out of range); `BINGHAM_ERR_NOT_CONVERGED` (the tolerance was not met within the
+ * budget). The arguments (options included) are checked before `fn` is first called.
+ *
+ * # Safety
+ * As for `bingham_filter_update_nonlinear()`; `opts`: `NULL` or a readable
+ * `bingham_nonlinear_options`; `report`: `NULL` or a writable `bingham_nonlinear_report`.
+ */
+enum bingham_status bingham_filter_update_nonlinear_opts(struct bingham_filter *f,
+                                                         bingham_log_likelihood_fn fn,
+                                                         void *user_data,
+                                                         const struct bingham_nonlinear_options *opts,
+                                                         struct bingham_nonlinear_report *report);
 
 /**
  * Fills `p` with the default parameters for the sampling period `sample_time` (seconds, > 0).

@@ -572,6 +572,23 @@ Distribution vector_observation(const Eigen::MatrixBase<DB> &body, const Eigen::
 /// Model: x[k+1] = x[k] (+) w[k], measurement = x[k] (+) v[k], with Bingham noises w, v (pass the
 /// same noise object every step: the library caches its moments). A moved-from Filter is empty:
 /// its methods throw Error(BINGHAM_ERR_NULL_ARGUMENT); destroying or assigning to it is fine.
+/// How the nonlinear steps control their error (bingham_nonlinear_options); the defaults are
+/// the library's: tolerance 0 = the step's own default (BINGHAM_NONLINEAR_PREDICT_TOLERANCE,
+/// BINGHAM_NONLINEAR_UPDATE_TOLERANCE), mode tolerance 0.05 spreads, 20000 calls.
+struct NonlinearOptions {
+    /// Largest accepted error estimate of any entry of the second moment (0: the default).
+    double tolerance = 0.0;
+    /// Update only: largest accepted mode error estimate, as a fraction of the spread.
+    double mode_tolerance = 0.05;
+    /// The most callback calls of one step.
+    std::size_t max_calls = 20000;
+    /// The C struct.
+    bingham_nonlinear_options c() const noexcept { return {tolerance, mode_tolerance, max_calls}; }
+};
+
+/// What a nonlinear step measured (see bingham_nonlinear_report).
+using NonlinearReport = bingham_nonlinear_report;
+
 class Filter {
 public:
     /// A filter with the initial estimate `initial` (d = 2 or 4).
@@ -629,6 +646,23 @@ public:
                                                              noise.M.data(), noise.z.data());
         detail::check_callback(st, c);
     }
+    /// Nonlinear prediction with its error controlled by `opts` (bingham_filter_predict_nonlinear_opts):
+    /// the 19 deterministic points where their error estimate is below a tenth of the
+    /// tolerance, randomized quasi-Monte Carlo to the tolerance otherwise. Returns what was
+    /// measured; a tolerance not met within `opts.max_calls` throws
+    /// Error(BINGHAM_ERR_NOT_CONVERGED) with the estimate in its message (the filter unchanged).
+    template <class F>
+    NonlinearReport predict_nonlinear(F &&a, const Distribution &noise, const NonlinearOptions &opts) {
+        check_noise(noise, "bingham::Filter::predict_nonlinear");
+        using Fn = std::remove_reference_t<F>;
+        detail::Callback<Fn> c{&a, nullptr};
+        bingham_nonlinear_options o = opts.c();
+        NonlinearReport r{};
+        bingham_status st = bingham_filter_predict_nonlinear_opts(
+            f_, &detail::transition_trampoline<Fn>, &c, noise.M.data(), noise.z.data(), &o, &r);
+        detail::check_callback(st, c);
+        return r;
+    }
     /// Nonlinear update: posterior prop. to prior(x) L(x) (bingham_filter_update_nonlinear).
     /// `log_l` is any callable `double(const double *x)` returning log L(x) (finite) for a unit
     /// vector x of d() entries (L(-x) = L(x) is the caller's contract); called at the samples
@@ -642,6 +676,24 @@ public:
         detail::Callback<Fn> c{&log_l, nullptr};
         bingham_status st = bingham_filter_update_nonlinear(f_, &detail::log_likelihood_trampoline<Fn>, &c);
         detail::check_callback(st, c);
+    }
+
+    /// Nonlinear update with its error controlled by `opts` (bingham_filter_update_nonlinear_opts):
+    /// the deterministic approximation checked and corrected by randomized quasi-Monte Carlo
+    /// importance sampling until 3 standard errors meet the tolerances. Returns what was
+    /// measured; tolerances not met within `opts.max_calls` throw
+    /// Error(BINGHAM_ERR_NOT_CONVERGED) with the estimates in its message (the filter unchanged).
+    template <class F>
+    NonlinearReport update_nonlinear(F &&log_l, const NonlinearOptions &opts) {
+        require("bingham::Filter::update_nonlinear");
+        using Fn = std::remove_reference_t<F>;
+        detail::Callback<Fn> c{&log_l, nullptr};
+        bingham_nonlinear_options o = opts.c();
+        NonlinearReport r{};
+        bingham_status st =
+            bingham_filter_update_nonlinear_opts(f_, &detail::log_likelihood_trampoline<Fn>, &c, &o, &r);
+        detail::check_callback(st, c);
+        return r;
     }
 
     /// Prediction with a body-frame rotation increment (d = 4), e.g. from a gyroscope.

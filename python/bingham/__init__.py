@@ -75,7 +75,7 @@ from .distribution import (
     second_moment,
     vector_observation,
 )
-from .filter import Filter
+from .filter import PREDICT_TOLERANCE, UPDATE_TOLERANCE, Filter, NonlinearReport
 from .quaternion import (
     OrientationError,
     from_scipy,
@@ -86,6 +86,9 @@ from .quaternion import (
 )
 
 __all__ = [
+    "NonlinearReport",
+    "PREDICT_TOLERANCE",
+    "UPDATE_TOLERANCE",
     "__version__",
     "LATENCY_ESTIMATE",
     "Array",

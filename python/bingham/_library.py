@@ -83,6 +83,15 @@ _SIGNATURES = {
     ),
     "bingham_filter_predict_nonlinear": (_STATUS, [ctypes.c_void_p, _TRANSITION_FN, ctypes.c_void_p, _D, _D]),
     "bingham_filter_update_nonlinear": (_STATUS, [ctypes.c_void_p, _LOG_LIKELIHOOD_FN, ctypes.c_void_p]),
+    "bingham_nonlinear_options_default": (_STATUS, [ctypes.c_void_p]),
+    "bingham_filter_predict_nonlinear_opts": (
+        _STATUS,
+        [ctypes.c_void_p, _TRANSITION_FN, ctypes.c_void_p, _D, _D, ctypes.c_void_p, ctypes.c_void_p],
+    ),
+    "bingham_filter_update_nonlinear_opts": (
+        _STATUS,
+        [ctypes.c_void_p, _LOG_LIKELIHOOD_FN, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p],
+    ),
     "bingham_filter_angular_spread": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_vector_observation": (_STATUS, [_D, _D, ctypes.c_double, _D, _D]),
     "bingham_noise_from_angle_std": (_STATUS, [_SIZE, ctypes.c_double, _D, _D]),

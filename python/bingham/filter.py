@@ -4,6 +4,7 @@ and nonlinear prediction, measurement updates, likelihoods)."""
 from __future__ import annotations
 
 import ctypes
+from dataclasses import dataclass
 from typing import Any, Callable, Optional, Tuple
 
 import numpy as np
@@ -13,7 +14,76 @@ from ._callback import _Callback
 from .errors import _check
 from ._library import _LOG_LIKELIHOOD_FN, _SIZE, _TRANSITION_FN, lib
 
-__all__ = ["Filter"]
+__all__ = ["Filter", "NonlinearReport", "PREDICT_TOLERANCE", "UPDATE_TOLERANCE"]
+
+#: The nonlinear prediction's default tolerance (``BINGHAM_NONLINEAR_PREDICT_TOLERANCE``): the
+#: largest accepted error estimate of any entry of the predicted second moment.
+PREDICT_TOLERANCE = 5e-4
+#: The nonlinear update's default tolerance (``BINGHAM_NONLINEAR_UPDATE_TOLERANCE``).
+UPDATE_TOLERANCE = 2.5e-3
+
+
+class _Options(ctypes.Structure):
+    _fields_ = [
+        ("tolerance", ctypes.c_double),
+        ("mode_tolerance", ctypes.c_double),
+        ("max_calls", _SIZE),
+    ]
+
+
+class _Report(ctypes.Structure):
+    _fields_ = [
+        ("calls", _SIZE),
+        ("error_estimate", ctypes.c_double),
+        ("mode_error_estimate", ctypes.c_double),
+        ("method", ctypes.c_int),
+        ("samples", _SIZE),
+        ("effective_share", ctypes.c_double),
+    ]
+
+
+@dataclass(frozen=True)
+class NonlinearReport:
+    """What a nonlinear step measured (``bingham_nonlinear_report``).
+
+    ``calls``: callback calls made; ``error_estimate``: the error estimate of the result's
+    second moment (largest entry, absolute; at most the tolerance); ``mode_error_estimate``:
+    the update's mode error estimate as a fraction of the posterior's spread (0 for the
+    prediction); ``method``: ``"deterministic"`` or ``"sampled"``; ``samples``: sampled points
+    behind the result; ``effective_share``: the final importance weights' effective share.
+    """
+
+    calls: int
+    error_estimate: float
+    mode_error_estimate: float
+    method: str
+    samples: int
+    effective_share: float
+
+
+def _options(tolerance: Optional[float], mode_tolerance: Optional[float], max_calls: Optional[int]) -> _Options:
+    o = _Options()
+    _check(lib().bingham_nonlinear_options_default(ctypes.byref(o)))
+    if tolerance is not None:
+        o.tolerance = float(tolerance)
+    if mode_tolerance is not None:
+        o.mode_tolerance = float(mode_tolerance)
+    if max_calls is not None:
+        if int(max_calls) < 0:
+            raise ValueError(f"max_calls must be non-negative, got {max_calls}")
+        o.max_calls = int(max_calls)
+    return o
+
+
+def _report(r: _Report) -> NonlinearReport:
+    return NonlinearReport(
+        calls=int(r.calls),
+        error_estimate=float(r.error_estimate),
+        mode_error_estimate=float(r.mode_error_estimate),
+        method="deterministic" if r.method == 0 else "sampled",
+        samples=int(r.samples),
+        effective_share=float(r.effective_share),
+    )
 
 
 class Filter:
@@ -118,12 +188,25 @@ class Filter:
         _check(lib().bingham_filter_predict_rotation(self._h(), _ptr(u), _ptr(m_w), _ptr(z_w)))
 
     def predict_nonlinear(
-        self, fn: Callable[[Array], ArrayLike], m_w: ArrayLike, z_w: ArrayLike
-    ) -> None:
+        self,
+        fn: Callable[[Array], ArrayLike],
+        m_w: ArrayLike,
+        z_w: ArrayLike,
+        *,
+        tolerance: Optional[float] = None,
+        max_calls: Optional[int] = None,
+    ) -> NonlinearReport:
         """Nonlinear prediction ``x[k+1] = fn(x[k]) ⊕ w[k]``, w ~ Bingham(m_w, z_w).
 
-        ``fn`` is called once per deterministic sample of the state (19 for d = 4, 3 for d = 2;
-        fewer where the scheme falls back, see :func:`deterministic_samples`) with a unit vector
+        The predicted second moment comes from the deterministic samples of the state (19
+        calls for d = 4, 3 for d = 2), accepted where their embedded error estimate is below a
+        tenth of ``tolerance`` (default :data:`PREDICT_TOLERANCE`; exact models such as a
+        rotation always are), otherwise from randomized quasi-Monte Carlo refined until 3
+        standard errors meet ``tolerance``; beyond ``max_calls`` calls (default 20000)
+        :class:`BinghamError` with status ``ERR_NOT_CONVERGED`` is raised and the filter is
+        unchanged. Returns a :class:`NonlinearReport`.
+
+        ``fn`` is called with a unit vector
         ``x`` (a NumPy array of length d, a copy the callable may keep) and must return a unit
         vector of length d (any array-like; unit within ``UNIT_TOL``, then normalized). Its sign
         does not matter, and ``fn(-x) = ±fn(x)`` is the caller's contract (``q`` and ``-q`` are
@@ -136,6 +219,8 @@ class Filter:
         exception, if any: see ``__cause__``).
         """
         m_w, z_w = self._noise(m_w, z_w, ("m_w", "z_w"))
+        opts = _options(tolerance, None, max_calls)
+        rep = _Report()
         d = self.d
         guard = _Callback()
 
@@ -150,13 +235,31 @@ class Filter:
         handle = self._h()
         self._busy = True
         try:
-            status = lib().bingham_filter_predict_nonlinear(handle, cb, None, _ptr(m_w), _ptr(z_w))
+            status = lib().bingham_filter_predict_nonlinear_opts(
+                handle, cb, None, _ptr(m_w), _ptr(z_w), ctypes.byref(opts), ctypes.byref(rep)
+            )
         finally:
             self._busy = False
         guard.check(status)
+        return _report(rep)
 
-    def update_nonlinear(self, log_likelihood: Callable[[Array], float]) -> None:
+    def update_nonlinear(
+        self,
+        log_likelihood: Callable[[Array], float],
+        *,
+        tolerance: Optional[float] = None,
+        mode_tolerance: Optional[float] = None,
+        max_calls: Optional[int] = None,
+    ) -> NonlinearReport:
         """Nonlinear Bayes update: posterior ∝ prior(x) · L(x), ``log_likelihood(x)`` = log L(x).
+
+        Every update is checked: the deterministic approximation below is corrected by
+        randomized quasi-Monte Carlo importance sampling around it until 3 standard errors of
+        every entry of the posterior's second moment meet ``tolerance`` (default
+        :data:`UPDATE_TOLERANCE`) and those of the mode ``mode_tolerance`` (default 0.05) of the
+        posterior's spread; beyond ``max_calls`` calls (default 20000) :class:`BinghamError`
+        with status ``ERR_NOT_CONVERGED`` is raised (its message gives the estimate reached) and
+        the filter is unchanged. Returns a :class:`NonlinearReport`.
 
         ``log_likelihood`` gets a unit vector ``x`` (a NumPy array of length d, a copy) and
         returns a finite float; ``L(-x) = L(x)`` is the caller's contract. The update is
@@ -173,6 +276,8 @@ class Filter:
         the filter is unchanged and :class:`BinghamError` with status ``ERR_CALLBACK`` is raised
         (``from`` the callable's exception, if any).
         """
+        opts = _options(tolerance, mode_tolerance, max_calls)
+        rep = _Report()
         d = self.d
         guard = _Callback()
 
@@ -184,10 +289,13 @@ class Filter:
         handle = self._h()
         self._busy = True
         try:
-            status = lib().bingham_filter_update_nonlinear(handle, cb, None)
+            status = lib().bingham_filter_update_nonlinear_opts(
+                handle, cb, None, ctypes.byref(opts), ctypes.byref(rep)
+            )
         finally:
             self._busy = False
         guard.check(status)
+        return _report(rep)
 
     def update(self, measurement: ArrayLike, m_v: ArrayLike, z_v: ArrayLike) -> None:
         """Measurement update with ``measurement = x ⊕ v``, v ~ Bingham(m_v, z_v)."""

@@ -3,8 +3,6 @@
 //! inputs, call the core, copy results out. The core computes every new state completely before
 //! it assigns it, so a failed call leaves the filter exactly as it was.
 
-use std::os::raw::{c_int, c_void};
-
 use super::args::{args, get_into, Arg, ArrayIn, Store};
 use super::guard::{free_handle, guard, handle, handle_mut, Failure, FfiResult};
 use super::status::bingham_status;
@@ -37,7 +35,7 @@ pub const BINGHAM_FILTER_MAX_CONCENTRATION: f64 = 1e10;
 /// exact bit patterns), so passing the same noise arrays every step costs nothing extra.
 #[allow(non_camel_case_types)]
 pub struct bingham_filter {
-    inner: BinghamFilter,
+    pub(super) inner: BinghamFilter,
 }
 
 /// Creates a filter with the initial estimate `Bingham(m0, z0)`.
@@ -230,7 +228,7 @@ pub unsafe extern "C" fn bingham_filter_mode(
 ///
 /// # Safety
 /// The caller's contract for the arguments (the noise: d*d and d readable doubles).
-unsafe fn noise_step<B: Arg, A: Arg, R>(
+pub(super) unsafe fn noise_step<B: Arg, A: Arg, R>(
     d: usize,
     before: B,
     [(m_name, m), (z_name, z)]: [(&'static str, *const f64); 2],
@@ -464,174 +462,6 @@ pub unsafe extern "C" fn bingham_filter_log_likelihood_vector(
         let value = filter.inner.log_likelihood_vector(b, r, kappa)?;
         // SAFETY: every input has been read.
         unsafe { out.set(value) };
-        Ok(())
-    })
-}
-
-/// The transition function `a` of `bingham_filter_predict_nonlinear()` (system model
-/// `x[k+1] = a(x[k]) (+) w[k]`).
-///
-/// Called with `x_in`: a unit vector of d doubles (the filter's dimension; a quaternion, scalar
-/// first, for d = 4), owned by the library and valid during the call only. It must write the
-/// unit vector `a(x_in)` to `x_out` (d doubles; unit within `BINGHAM_UNIT_TOL`, it is then
-/// normalized; its sign does not matter) and return 0. `x_out` is filled with NaN before each
-/// call, so an output left unwritten is caught. `user_data` is the pointer passed to
-/// `bingham_filter_predict_nonlinear()`, unchanged.
-///
-/// A non-zero return means failure: the prediction stops and returns `BINGHAM_ERR_CALLBACK`
-/// with the filter unchanged; so does an output that is not finite or not unit length. The
-/// message of `bingham_last_error_message()` names the point and the returned code or value.
-///
-/// Contract (the caller's, not checked): `a(-x) = ±a(x)` (an axis / rotation and its negative
-/// are the same, so `a` must respect the sign symmetry). The function is called on the calling
-/// thread, synchronously, a fixed number of times per prediction (see
-/// `bingham_filter_predict_nonlinear()`). It must return normally: it must not unwind (a C++
-/// exception, a Rust panic) or `longjmp` through the library, which is undefined behaviour
-/// (catch exceptions inside and return non-zero instead), and it must not call functions on
-/// the same filter handle (other library functions, e.g. on other handles, are fine).
-#[allow(non_camel_case_types)]
-pub type bingham_transition_fn = Option<
-    unsafe extern "C" fn(x_in: *const f64, x_out: *mut f64, user_data: *mut c_void) -> c_int,
->;
-
-/// The log-likelihood function of `bingham_filter_update_nonlinear()`: the natural logarithm
-/// of the likelihood `L(x) = p(measurement | x)` up to an additive constant (a log-likelihood,
-/// so sharp likelihoods do not underflow).
-///
-/// Called with `x`: a unit vector of d doubles (a quaternion, scalar first, for d = 4), owned by
-/// the library and valid during the call only. It must write `log L(x)` (finite) to `*log_l`
-/// and return 0. `*log_l` holds NaN before each call, so a value left unwritten is caught.
-/// `user_data` is the pointer passed to `bingham_filter_update_nonlinear()`, unchanged.
-///
-/// A non-zero return means failure: the update stops and returns `BINGHAM_ERR_CALLBACK` with
-/// the filter unchanged; so does a value that is not finite (a likelihood of exactly 0 has no
-/// finite logarithm: return a large negative number instead).
-///
-/// Contract (the caller's, not checked): `L(-x) = L(x)`. Called on the calling thread,
-/// synchronously (how often: see `bingham_filter_update_nonlinear()`); it must return normally
-/// (no unwinding or `longjmp` through the library) and must not call functions on the same
-/// filter handle.
-#[allow(non_camel_case_types)]
-pub type bingham_log_likelihood_fn =
-    Option<unsafe extern "C" fn(x: *const f64, log_l: *mut f64, user_data: *mut c_void) -> c_int>;
-
-/// Nonlinear prediction step: the state becomes the distribution of `a(x) (+) w`,
-/// `w ~ Bingham(m_w, z_w)`, for a transition function `a` given as a C callback.
-///
-/// The state's deterministic samples (the `BINGHAM_SAMPLES_MOMENTS` points of
-/// `bingham_deterministic_samples()`, which reproduce its second and fourth moments) are passed
-/// through `fn`; the weighted second moment of the results is composed exactly with the
-/// noise's second moment and the Bingham distribution with that second moment is fitted
-/// (moment matching), as in `bingham_filter_predict()`. With `a` the identity this equals
-/// `bingham_filter_predict()` to rounding.
-///
-/// - `fn`: the transition function (see `bingham_transition_fn` for its contract), called once
-///   per sample, in the order of `bingham_deterministic_samples()`: 3 times for d = 2, 19 times
-///   for d = 4 (7 where the moment-matched set does not exist and the TAC 2016 points are used);
-///   the first failing call ends the prediction.
-/// - `user_data`: passed to every call of `fn` unchanged; may be `NULL`.
-/// - `m_w`, `z_w`: the process noise, as in `bingham_filter_predict()` (cached likewise).
-///
-/// Concentrations below `-BINGHAM_FILTER_MAX_CONCENTRATION` (state or noise) are raised to it
-/// for this computation, as in `bingham_filter_predict()`. No heap allocation once the noise is
-/// cached (beyond what `fn` does).
-///
-/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `fn`, `m_w`, `z_w`), `BINGHAM_ERR_INVALID_ARGUMENT`
-/// (NaN/Inf, `m_w` not orthogonal), `BINGHAM_ERR_CALLBACK` (`fn` returned non-zero, or an output
-/// that is not finite or not unit), `BINGHAM_ERR_NOT_CONVERGED` / `BINGHAM_ERR_NUMERICAL`
-/// (moment matching). The arguments are checked before `fn` is first called. On error the
-/// filter is unchanged.
-///
-/// # Safety
-/// `f`: a live handle; `fn`: a function honouring the contract of `bingham_transition_fn`;
-/// `m_w`: d*d and `z_w`: d readable doubles.
-#[no_mangle]
-pub unsafe extern "C" fn bingham_filter_predict_nonlinear(
-    f: *mut bingham_filter,
-    r#fn: bingham_transition_fn,
-    user_data: *mut c_void,
-    m_w: *const f64,
-    z_w: *const f64,
-) -> bingham_status {
-    guard("bingham_filter_predict_nonlinear", || {
-        // SAFETY: caller contract.
-        let filter = unsafe { handle_mut("f", f)? };
-        let callback = r#fn.ok_or_else(|| Failure::null("fn"))?;
-        let transition = |x: &[f64], out: &mut [f64]| -> Result<(), String> {
-            out.fill(f64::NAN);
-            // SAFETY: `x` and `out` are library-owned arrays of d doubles, valid for the call;
-            // the callback's own contract is the caller's (see `bingham_transition_fn`).
-            let rc = unsafe { callback(x.as_ptr(), out.as_mut_ptr(), user_data) };
-            if rc != 0 {
-                Err(format!("callback returned {rc}"))
-            } else {
-                Ok(())
-            }
-        };
-        let noise = [("m_w", m_w), ("z_w", z_w)];
-        // SAFETY: caller contract.
-        unsafe {
-            noise_step(filter.inner.dim(), (), noise, (), |(), m, z| {
-                filter.inner.predict_nonlinear(transition, m, z)
-            })
-        }
-    })
-}
-
-/// Nonlinear measurement update (Bayes' rule): the state becomes the Bingham approximation of
-/// the posterior `∝ prior(x) · L(x)`, for a likelihood `L` given by its logarithm as a C callback
-/// (e.g. a sensor that sees a nonlinear function of the orientation).
-///
-/// The likelihood is absorbed iteratively: each round evaluates `fn` at the deterministic
-/// samples of the current approximation (the `BINGHAM_SAMPLES_MOMENTS` points of
-/// `bingham_deterministic_samples()`, plus fit-only points where those are too few to determine
-/// a quadratic form: 5 calls per round for d = 2, 19 for d = 4), fits a Bingham exponent to the
-/// values and multiplies it in, a fraction at a time where `log L` is far from a quadratic form
-/// over the samples (progressive tempering, so that the points do not collapse onto one); two
-/// final importance-weighted moment matches correct the result. Calls per update: 57 for a
-/// Bingham likelihood with d = 4, 57–190 for the camera likelihoods of `tests/nonlinear.rs`. A
-/// likelihood that is itself a Bingham density (`log L` a quadratic form in x) is absorbed
-/// exactly. The number of calls depends on the likelihood: a few rounds over the samples for
-/// one about as broad as the state, more for a sharper one; the rounds are bounded (a
-/// likelihood not absorbed within the limit gives `BINGHAM_ERR_NOT_CONVERGED`).
-///
-/// Reliable where the posterior is close to a Bingham distribution (unimodal up to the sign);
-/// a likelihood with several separated modes gets a single-mode fit. For a likelihood that is
-/// a Bingham density with known parameters, `bingham_filter_update()` / `bingham_multiply()`
-/// compute the same product directly.
-///
-/// - `fn`: the log-likelihood (see `bingham_log_likelihood_fn` for its contract).
-/// - `user_data`: passed to every call of `fn` unchanged; may be `NULL`.
-///
-/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `fn`; checked before `fn` is first called),
-/// `BINGHAM_ERR_CALLBACK` (`fn` returned non-zero or a value that is not finite; the first such
-/// call ends the update), `BINGHAM_ERR_NOT_CONVERGED` (not absorbed within the limit, or a fit
-/// did not converge), `BINGHAM_ERR_NUMERICAL`. On error the filter is unchanged.
-///
-/// # Safety
-/// `f`: a live handle; `fn`: a function honouring the contract of `bingham_log_likelihood_fn`.
-#[no_mangle]
-pub unsafe extern "C" fn bingham_filter_update_nonlinear(
-    f: *mut bingham_filter,
-    r#fn: bingham_log_likelihood_fn,
-    user_data: *mut c_void,
-) -> bingham_status {
-    guard("bingham_filter_update_nonlinear", || {
-        // SAFETY: caller contract.
-        let filter = unsafe { handle_mut("f", f)? };
-        let callback = r#fn.ok_or_else(|| Failure::null("fn"))?;
-        let log_l = |x: &[f64]| -> Result<f64, String> {
-            let mut value = f64::NAN;
-            // SAFETY: `x` is a library-owned array of d doubles and `value` a local double,
-            // both valid for the call; the callback's contract is the caller's.
-            let rc = unsafe { callback(x.as_ptr(), &mut value, user_data) };
-            if rc != 0 {
-                Err(format!("callback returned {rc}"))
-            } else {
-                Ok(value)
-            }
-        };
-        filter.inner.update_nonlinear(log_l)?;
         Ok(())
     })
 }

@@ -53,6 +53,8 @@ pub mod deterministic;
 
 pub mod filter;
 
+pub mod nonlinear;
+
 pub mod ahrs;
 
 pub use ahrs::*;
@@ -61,6 +63,7 @@ pub use distribution::*;
 pub use filter::*;
 pub use guard::bingham_last_error_message;
 pub use mle::*;
+pub use nonlinear::*;
 pub use normalization::*;
 pub use observation::*;
 pub use status::{bingham_status, bingham_status_str};

@@ -3,9 +3,12 @@
 //! linearization and importance correction (see [`super::BinghamFilter::update_nonlinear`]).
 
 use super::noise::{capped, Role};
+use super::nonlinear_options::{
+    NonlinearMethod, NonlinearOptions, NonlinearReport, DEFAULT_PREDICT_TOLERANCE,
+};
 use super::{Core, Mat, Vect, MAX_CONCENTRATION};
 use crate::canonical::UNIT_TOL;
-use crate::deterministic::{for_each_point, for_each_probe, plan, Scheme};
+use crate::deterministic::{for_each_point, for_each_probe, plan, Reproduced, Scheme};
 use crate::distribution::bayes_product;
 use crate::error::{Error, Result};
 use crate::linalg::cholesky_solve;
@@ -44,6 +47,10 @@ struct EvaluatedPoints<const D: usize> {
     l: [f64; MAX_POINTS],
     n: usize,
 }
+
+/// The deterministic prediction is accepted where the embedded rule's difference is below this
+/// fraction of the tolerance (see [`NonlinearMethod::Deterministic`]).
+const EMBEDDED_MARGIN: f64 = 0.1;
 
 /// Unknowns of a symmetric `P` for d = 4.
 const MAX_UNKNOWNS: usize = 10;
@@ -153,16 +160,7 @@ impl<const D: usize> EvaluatedPoints<D> {
 
 impl<const D: usize> Core<D> {
     /// Visits the deterministic points (Moments scheme) of `Bingham(m, z)` with the
-    /// concentrations capped as in the prediction.
-    fn visit_points(
-        m: &Mat<D>,
-        z: &Vect<D>,
-        visit: impl FnMut(&Vect<D>, f64) -> Result<()>,
-    ) -> Result<()> {
-        Self::visit_points_and_probes(m, z, false, visit)
-    }
-
-    /// [`Self::visit_points`], followed (if `probes`) by the fit-only probe points of
+    /// concentrations capped as in the prediction, followed (if `probes`) by the fit-only probe points of
     /// [`for_each_probe`] (visited with a negative weight: `−w`).
     fn visit_points_and_probes(
         m: &Mat<D>,
@@ -186,14 +184,20 @@ impl<const D: usize> Core<D> {
         Ok(())
     }
 
-    pub(super) fn predict_nonlinear<F>(&mut self, a: &mut F, m_w: &[f64], z_w: &[f64]) -> Result<()>
+    pub(super) fn predict_nonlinear<F>(
+        &mut self,
+        a: &mut F,
+        m_w: &[f64],
+        z_w: &[f64],
+        opts: &NonlinearOptions,
+    ) -> Result<NonlinearReport>
     where
         F: FnMut(&[f64], &mut [f64]) -> std::result::Result<(), String>,
     {
-        let noise = self.process.get(Role::Process, m_w, z_w)?;
-        let mut s = Mat::<D>::zeros();
-        let mut k = 0usize;
-        Self::visit_points(&self.m, &self.z, |x, wt| {
+        opts.check()?;
+        let noise_moment = self.process.get(Role::Process, m_w, z_w)?.moment;
+        let mut calls = 0usize;
+        let mut eval = |x: &Vect<D>, k: usize| -> Result<Vect<D>> {
             let mut out = [0.0; D];
             a(x.as_slice(), &mut out).map_err(|msg| {
                 Error::Callback(format!(
@@ -209,17 +213,119 @@ impl<const D: usize> Core<D> {
                      (norm {n}, tolerance {UNIT_TOL:e})"
                 )));
             }
-            let v = v / n;
-            s.ger(wt, &v, &v, 1.0);
-            k += 1;
-            Ok(())
-        })?;
-        let c = compose_moments(&s, &noise.moment);
+            Ok(v / n)
+        };
+        // The deterministic points, with the second-moment rule embedded in them.
+        let zc = capped(&self.z);
+        let mut grad = [0.0; D];
+        let mut hess = [0.0; 16];
+        let p = plan::<D>(
+            zc.as_slice(),
+            Scheme::Moments,
+            &mut grad,
+            &mut hess[..D * D],
+        )?;
+        let mut s = Mat::<D>::zeros();
+        let mut low = Mat::<D>::zeros();
+        let mut low_weight = 0.0;
+        let mut mode_value = Vect::<D>::zeros();
+        for_each_point(
+            &self.m,
+            &p,
+            &grad,
+            &hess[..D * D],
+            &mut |x: &Vect<D>, wt: f64| {
+                if calls >= opts.max_calls {
+                    return Err(Error::NotConverged(format!(
+                        "nonlinear prediction: the call budget ({} calls) is smaller than the \
+                     {} deterministic points",
+                        opts.max_calls,
+                        p.count()
+                    )));
+                }
+                let v = eval(x, calls)?;
+                calls += 1;
+                s.ger(wt, &v, &v, 1.0);
+                // A point on a principal axis (one non-mode coordinate) or the mode itself.
+                let y = self.m.transpose() * x;
+                let mut axis = None;
+                let mut off = 0;
+                for i in 0..D - 1 {
+                    if y[i].abs() > 1e-12 * y[D - 1].abs() {
+                        axis = Some(i);
+                        off += 1;
+                    }
+                }
+                match (off, axis) {
+                    (0, _) => mode_value = v,
+                    (1, Some(i)) => {
+                        // The two axis points together carry E[y_i²] = ω_i.
+                        let w = grad[i] / (2.0 * y[i] * y[i]);
+                        low.ger(w, &v, &v, 1.0);
+                        low_weight += w;
+                    }
+                    _ => {}
+                }
+                Ok(())
+            },
+        )?;
+        low.ger(1.0 - low_weight, &mode_value, &mode_value, 1.0);
+        let embedded = if p.reproduced() == Reproduced::FourthMoments {
+            (s - low).abs().max()
+        } else {
+            // The fallback set (the TAC 2016 points, λ = 1/2) reproduces only the second
+            // moment and embeds no lower rule: a second rule of the same degree (λ = 1: the
+            // pairs on the principal axes) on its own points gives the estimate instead.
+            let mut g2 = [0.0; D];
+            let mut h2 = [0.0; 16];
+            let p2 = plan::<D>(
+                zc.as_slice(),
+                Scheme::Tac2016 { lambda: 1.0 },
+                &mut g2,
+                &mut h2[..D * D],
+            )?;
+            let mut s2 = Mat::<D>::zeros();
+            for_each_point(
+                &self.m,
+                &p2,
+                &g2,
+                &h2[..D * D],
+                &mut |x: &Vect<D>, wt: f64| {
+                    if calls >= opts.max_calls {
+                        return Err(Error::NotConverged(format!(
+                            "nonlinear prediction: the call budget ({} calls) is smaller than the \
+                         deterministic points",
+                            opts.max_calls
+                        )));
+                    }
+                    let v = eval(x, calls)?;
+                    calls += 1;
+                    s2.ger(wt, &v, &v, 1.0);
+                    Ok(())
+                },
+            )?;
+            (s - s2).abs().max()
+        };
+        let tolerance = opts.tolerance_or(DEFAULT_PREDICT_TOLERANCE);
+        let (s, report) = if embedded <= EMBEDDED_MARGIN * tolerance {
+            let report = NonlinearReport {
+                calls,
+                error_estimate: embedded,
+                mode_error_estimate: 0.0,
+                method: NonlinearMethod::Deterministic,
+                samples: 0,
+                effective_share: 1.0,
+            };
+            (s, report)
+        } else {
+            self.sampled_prediction(&mut eval, &grad, &hess[..D * D], opts, &mut calls)?
+        };
+        let c = compose_moments(&s, &noise_moment);
         let (m_new, z_new, solution) = fit_second_moment(&c, self.predicted.as_ref())?;
         self.m = m_new;
         self.z = z_new;
         self.predicted = Some(solution);
-        Ok(())
+        Ok(report)
     }
 
     /// The deterministic points of `Bingham(m, z)` with the log-likelihood at each.
@@ -317,7 +423,9 @@ impl<const D: usize> Core<D> {
         }
     }
 
-    pub(super) fn update_nonlinear<L>(&mut self, log_l: &mut L) -> Result<()>
+    /// The deterministic approximation of the posterior (tempering and importance correction),
+    /// not yet checked; the state is not changed.
+    fn deterministic_update<L>(&self, log_l: &mut L) -> Result<(Mat<D>, Vect<D>)>
     where
         L: FnMut(&[f64]) -> std::result::Result<f64, String>,
     {
@@ -355,9 +463,7 @@ impl<const D: usize> Core<D> {
                     (m, z) =
                         self.importance_correction(&m, &z, log_l, &mut points, step + 1 + pass)?;
                 }
-                self.m = m;
-                self.z = z;
-                return Ok(());
+                return Ok((m, z));
             }
             remaining -= db;
         }
@@ -366,5 +472,59 @@ impl<const D: usize> Core<D> {
              tempering steps ({remaining:.3} of its exponent left); it is far sharper than \
              the prior or multimodal"
         )))
+    }
+
+    /// The nonlinear update with its error controlled by `opts` (see
+    /// [`super::BinghamFilter::update_nonlinear_opts`]); the state changes only on success.
+    pub(super) fn update_nonlinear<L>(
+        &mut self,
+        log_l: &mut L,
+        opts: &NonlinearOptions,
+    ) -> Result<NonlinearReport>
+    where
+        L: FnMut(&[f64]) -> std::result::Result<f64, String>,
+    {
+        opts.check()?;
+        let mut calls = 0usize;
+        let max_calls = opts.max_calls;
+        let mut over = false;
+        let mut counted = |x: &[f64]| -> std::result::Result<f64, String> {
+            if calls >= max_calls {
+                over = true;
+                return Err("call budget exhausted".into());
+            }
+            calls += 1;
+            log_l(x)
+        };
+        let (m, z) = match self.deterministic_update(&mut counted) {
+            Ok(v) => v,
+            Err(_) if over => {
+                return Err(Error::NotConverged(format!(
+                    "nonlinear update: the call budget ({max_calls} calls) ran out in the \
+                     deterministic approximation, before any error estimate"
+                )))
+            }
+            Err(e) => return Err(e),
+        };
+
+        let mut checked = |x: &Vect<D>| -> Result<f64> {
+            let l = log_l(x.as_slice()).map_err(|msg| {
+                Error::Callback(format!(
+                    "log-likelihood failed at {x:?} (sampled check): {msg}",
+                    x = x.as_slice()
+                ))
+            })?;
+            if !l.is_finite() {
+                return Err(Error::Callback(format!(
+                    "log-likelihood returned {l} at {x:?}: not finite",
+                    x = x.as_slice()
+                )));
+            }
+            Ok(l)
+        };
+        let (m, z, report) = self.sampled_update(m, z, &mut checked, opts, &mut calls)?;
+        self.m = m;
+        self.z = z;
+        Ok(report)
     }
 }

@@ -7,7 +7,10 @@
 //! output, nothing written), always or only at the k-th call. A failing callback gives
 //! BINGHAM_ERR_CALLBACK after exactly k + 1 calls, with the state (and, through the twin, the hidden
 //! state) unchanged; invalid arguments are refused before the first call; the callbacks always see
-//! a unit vector, a NaN-filled output and their own user pointer.
+//! a unit vector, a NaN-filled output and their own user pointer. Half the steps go through the
+//! `_opts` forms with random tolerances and budgets (from 1 call) and now and then an invalid
+//! option: never more calls than the budget, a report written only on success and consistent with
+//! the calls counted and the tolerance, invalid options refused before any call.
 
 use std::collections::BTreeMap;
 use std::os::raw::c_int;
@@ -389,10 +392,68 @@ fn nonlinear_sequence(
             NlFault::MisalignedHandle => f.cast::<u8>().wrapping_add(4).cast(),
             _ => f,
         };
+        // Half the steps through the `_opts` forms: random valid options (a tolerance of 0 =
+        // the default, or 1e-4 .. 0.1; budgets from 1 call), now and then one invalid field
+        // (refused before any call); a report or NULL.
+        let use_opts = rng.chance(0.5);
+        let mut opts = bingham_nonlinear_options {
+            tolerance: if rng.chance(0.3) {
+                0.0
+            } else {
+                rng.log_uniform(-4.0, -1.0)
+            },
+            mode_tolerance: rng.log_uniform(-2.0, 0.0),
+            max_calls: if rng.chance(0.3) {
+                1 + rng.below(400)
+            } else {
+                20_000
+            },
+        };
+        let bad_opts = use_opts && fault == NlFault::None && rng.chance(0.15);
+        if bad_opts {
+            match rng.below(3) {
+                0 => {
+                    opts.tolerance = if rng.chance(0.5) {
+                        -opts.tolerance - 1e-9
+                    } else {
+                        non_finite(&mut rng)
+                    }
+                }
+                1 => {
+                    opts.mode_tolerance = if rng.chance(0.5) {
+                        0.0
+                    } else {
+                        non_finite(&mut rng)
+                    }
+                }
+                _ => opts.max_calls = 0,
+            }
+        }
+        let want_report = use_opts && rng.chance(0.7);
+        let sentinel = bingham_nonlinear_report {
+            calls: 0x5a5a,
+            error_estimate: -7.0,
+            mode_error_estimate: -7.0,
+            method: -7,
+            samples: 0x5a5a,
+            effective_share: -7.0,
+        };
+        let mut report = sentinel;
+        let report_ptr: *mut bingham_nonlinear_report = if want_report {
+            &mut report
+        } else {
+            std::ptr::null_mut()
+        };
+        let opts_ptr: *const bingham_nonlinear_options = &opts;
+        let name = match (use_opts, predict) {
+            (true, true) => "bingham_filter_predict_nonlinear_opts",
+            (true, false) => "bingham_filter_update_nonlinear_opts",
+            _ => name,
+        };
         let before = state_bits(f, d);
         prime_last_error(name);
         if verbose {
-            eprintln!("step {step}: {name} {fault:?} {ctx:?}");
+            eprintln!("step {step}: {name} {fault:?} {ctx:?} opts {use_opts} {opts:?}");
         }
         let user = (&mut ctx as *mut CbCtx).cast::<c_void>();
         // SAFETY: f is live (or NULL / misaligned: refused); the callbacks match the contract;
@@ -404,14 +465,24 @@ fn nonlinear_sequence(
                 } else {
                     Some(fuzz_transition)
                 };
-                bingham_filter_predict_nonlinear(fp, cb, user, mp, zp)
+                if use_opts {
+                    bingham_filter_predict_nonlinear_opts(
+                        fp, cb, user, mp, zp, opts_ptr, report_ptr,
+                    )
+                } else {
+                    bingham_filter_predict_nonlinear(fp, cb, user, mp, zp)
+                }
             } else {
                 let cb: bingham_log_likelihood_fn = if fault == NlFault::NullFn {
                     None
                 } else {
                     Some(fuzz_log_likelihood)
                 };
-                bingham_filter_update_nonlinear(fp, cb, user)
+                if use_opts {
+                    bingham_filter_update_nonlinear_opts(fp, cb, user, opts_ptr, report_ptr)
+                } else {
+                    bingham_filter_update_nonlinear(fp, cb, user)
+                }
             }
         };
         calls += 1;
@@ -462,7 +533,41 @@ fn nonlinear_sequence(
             result = fail(format!("callback contract violated by the library: {v}"));
             break;
         }
+        let budget = if use_opts { opts.max_calls } else { 20_000 };
+        if ctx.calls > budget {
+            result = fail(format!(
+                "{} callback calls beyond the budget of {budget}",
+                ctx.calls
+            ));
+            break;
+        }
+        if want_report && st != BINGHAM_OK && format!("{report:?}") != format!("{sentinel:?}") {
+            result = fail(format!("{} but the report was written", status_name(st)));
+            break;
+        }
+        if want_report && st == BINGHAM_OK {
+            let tol = match (opts.tolerance, predict) {
+                (t, _) if t > 0.0 => t,
+                (_, true) => BINGHAM_NONLINEAR_PREDICT_TOLERANCE,
+                (_, false) => BINGHAM_NONLINEAR_UPDATE_TOLERANCE,
+            };
+            let ok = report.calls == ctx.calls
+                && report.error_estimate <= tol
+                && (report.method == BINGHAM_NONLINEAR_DETERMINISTIC
+                    || report.method == BINGHAM_NONLINEAR_SAMPLED)
+                && report.effective_share > 0.0
+                && report.effective_share <= 1.0
+                && (predict || report.mode_error_estimate <= opts.mode_tolerance);
+            if !ok {
+                result = fail(format!(
+                    "report {report:?} inconsistent with {} calls and tolerance {tol}",
+                    ctx.calls
+                ));
+                break;
+            }
+        }
         let want = match fault {
+            NlFault::None if bad_opts => Some(BINGHAM_ERR_INVALID_ARGUMENT),
             NlFault::None => None,
             NlFault::NonFiniteNoise(_) => Some(BINGHAM_ERR_INVALID_ARGUMENT),
             _ => Some(BINGHAM_ERR_NULL_ARGUMENT),
@@ -514,17 +619,27 @@ fn nonlinear_sequence(
             ctx.reset();
             let user = (&mut ctx as *mut CbCtx).cast::<c_void>();
             // SAFETY: as above, with valid arguments.
+            let twin_opts: *const bingham_nonlinear_options =
+                if use_opts { opts_ptr } else { std::ptr::null() };
             let st2 = unsafe {
                 if predict {
-                    bingham_filter_predict_nonlinear(
+                    bingham_filter_predict_nonlinear_opts(
                         twin,
                         Some(fuzz_transition),
                         user,
                         mw.as_ptr(),
                         zw.as_ptr(),
+                        twin_opts,
+                        std::ptr::null_mut(),
                     )
                 } else {
-                    bingham_filter_update_nonlinear(twin, Some(fuzz_log_likelihood), user)
+                    bingham_filter_update_nonlinear_opts(
+                        twin,
+                        Some(fuzz_log_likelihood),
+                        user,
+                        twin_opts,
+                        std::ptr::null_mut(),
+                    )
                 }
             };
             if st2 != BINGHAM_OK {
