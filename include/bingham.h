@@ -1337,12 +1337,15 @@ enum bingham_status bingham_filter_angular_spread(const struct bingham_filter *f
  * through `fn`; the weighted second moment of the results is composed exactly with the
  * noise's second moment and the Bingham distribution with that second moment is fitted
  * (moment matching), as in `bingham_filter_predict()`. With `a` the identity this equals
- * `bingham_filter_predict()` to rounding.
+ * `bingham_filter_predict()` to rounding. The result's error is estimated and controlled with
+ * the default tolerance, as `bingham_filter_predict_nonlinear_opts()` describes: where the
+ * points' own estimate is too large, sampled points refine the moment.
  *
  * - `fn`: the transition function (see `bingham_transition_fn` for its contract), called once
  *   per sample, in the order of `bingham_deterministic_samples()`: 3 times for d = 2, 19 times
- *   for d = 4 (7 where the moment-matched set does not exist and the TAC 2016 points are used);
- *   the first failing call ends the prediction.
+ *   for d = 4 (7 + 7 where the moment-matched set does not exist and two TAC 2016 rules are
+ *   compared), then at sampled points where the estimate asks (at most 20000 calls); the first
+ *   failing call ends the prediction.
  * - `user_data`: passed to every call of `fn` unchanged; may be `NULL`.
  * - `m_w`, `z_w`: the process noise, as in `bingham_filter_predict()` (cached likewise).
  *
@@ -1352,9 +1355,9 @@ enum bingham_status bingham_filter_angular_spread(const struct bingham_filter *f
  *
  * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `fn`, `m_w`, `z_w`), `BINGHAM_ERR_INVALID_ARGUMENT`
  * (NaN/Inf, `m_w` not orthogonal), `BINGHAM_ERR_CALLBACK` (`fn` returned non-zero, or an output
- * that is not finite or not unit), `BINGHAM_ERR_NOT_CONVERGED` / `BINGHAM_ERR_NUMERICAL`
- * (moment matching). The arguments are checked before `fn` is first called. On error the
- * filter is unchanged.
+ * that is not finite or not unit), `BINGHAM_ERR_NOT_CONVERGED` (the tolerance not met within
+ * the budget; moment matching) / `BINGHAM_ERR_NUMERICAL` (moment matching). The arguments are
+ * checked before `fn` is first called. On error the filter is unchanged.
  *
  * # Safety
  * `f`: a live handle; `fn`: a function honouring the contract of `bingham_transition_fn`;
@@ -1377,25 +1380,24 @@ enum bingham_status bingham_filter_predict_nonlinear(struct bingham_filter *f,
  * a quadratic form: 5 calls per round for d = 2, 19 for d = 4), fits a Bingham exponent to the
  * values and multiplies it in, a fraction at a time where `log L` is far from a quadratic form
  * over the samples (progressive tempering, so that the points do not collapse onto one); two
- * final importance-weighted moment matches correct the result. Calls per update: 57 for a
- * Bingham likelihood with d = 4, 57–190 for the camera likelihoods of `tests/nonlinear.rs`. A
- * likelihood that is itself a Bingham density (`log L` a quadratic form in x) is absorbed
- * exactly. The number of calls depends on the likelihood: a few rounds over the samples for
- * one about as broad as the state, more for a sharper one; the rounds are bounded (a
- * likelihood not absorbed within the limit gives `BINGHAM_ERR_NOT_CONVERGED`).
+ * final importance-weighted moment matches correct the result. Then the result is checked and
+ * corrected by randomized quasi-Monte Carlo importance sampling with the default tolerances
+ * (see `bingham_filter_update_nonlinear_opts()`): OK means the error estimate met them. Calls
+ * per update: 57 + 128 for a Bingham likelihood with d = 4 (absorbed exactly); measured counts
+ * for other likelihoods in `docs/accuracy.md` (nonlinear models). The rounds and the calls are
+ * bounded (beyond, `BINGHAM_ERR_NOT_CONVERGED`).
  *
- * Reliable where the posterior is close to a Bingham distribution (unimodal up to the sign);
- * a likelihood with several separated modes gets a single-mode fit. For a likelihood that is
- * a Bingham density with known parameters, `bingham_filter_update()` / `bingham_multiply()`
- * compute the same product directly.
+ * For a likelihood that is a Bingham density with known parameters, `bingham_filter_update()`
+ * / `bingham_multiply()` compute the same product directly.
  *
  * - `fn`: the log-likelihood (see `bingham_log_likelihood_fn` for its contract).
  * - `user_data`: passed to every call of `fn` unchanged; may be `NULL`.
  *
  * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `fn`; checked before `fn` is first called),
  * `BINGHAM_ERR_CALLBACK` (`fn` returned non-zero or a value that is not finite; the first such
- * call ends the update), `BINGHAM_ERR_NOT_CONVERGED` (not absorbed within the limit, or a fit
- * did not converge), `BINGHAM_ERR_NUMERICAL`. On error the filter is unchanged.
+ * call ends the update), `BINGHAM_ERR_NOT_CONVERGED` (not absorbed within the limit, the
+ * tolerance not met within 20000 calls, or a fit did not converge), `BINGHAM_ERR_NUMERICAL`.
+ * On error the filter is unchanged.
  *
  * # Safety
  * `f`: a live handle; `fn`: a function honouring the contract of `bingham_log_likelihood_fn`.

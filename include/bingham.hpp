@@ -633,8 +633,9 @@ public:
     /// Nonlinear prediction: x <- a(x) (+) w, w ~ noise (bingham_filter_predict_nonlinear).
     /// `a` is any callable `void(const double *x_in, double *x_out)`: x_in is a unit vector of
     /// d() entries, x_out receives the unit vector a(x_in) (d() entries; a(-x) = +-a(x) is the
-    /// caller's contract). Called once per deterministic sample of the state (3 times for d = 2,
-    /// 19 or 7 for d = 4), on this thread. An exception thrown by `a` stops the prediction and
+    /// caller's contract). Called at the deterministic samples of the state (3 for d = 2, 19 for
+    /// d = 4) and, where their error estimate asks, at sampled points (default tolerances; see
+    /// the overload with NonlinearOptions), on this thread. An exception thrown by `a` stops the prediction and
     /// is rethrown here; a non-finite or non-unit output throws Error(BINGHAM_ERR_CALLBACK). In
     /// both cases the filter is unchanged.
     template <class F>

@@ -268,9 +268,9 @@ class Filter:
         multiplied in as ``exp(Δβ xᵀPx)``, with ``Δβ`` such that the part of ``log L`` the fit
         misses contributes at most ``TEMPERING_RESIDUAL = 1`` per step (a Bingham likelihood is
         absorbed exactly, in one step), then two importance-weighted moment matches correct the
-        result (at most 200 steps; beyond that ``ERR_NOT_CONVERGED``). Reliable where the
-        posterior is close to a Bingham distribution (one mode up to the sign); for a Bingham
-        likelihood :meth:`update` and :func:`multiply` are exact.
+        result (at most 200 steps; beyond that ``ERR_NOT_CONVERGED``), before the sampled check
+        above; for a Bingham likelihood :meth:`update` and :func:`multiply` are exact and need
+        no callback.
 
         ``log_likelihood`` must not use this filter. If it raises or returns a non-finite value,
         the filter is unchanged and :class:`BinghamError` with status ``ERR_CALLBACK`` is raised

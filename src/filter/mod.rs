@@ -242,9 +242,11 @@ impl BinghamFilter {
 
     /// Nonlinear prediction `x_{k+1} = a(x_k) ⊕ w_k` with `w_k ~ Bingham(m_w, z_w)`.
     ///
-    /// `a` is called once per deterministic sample of the state (the
+    /// `a` is called at the deterministic samples of the state (the
     /// [`Scheme::Moments`](crate::deterministic::Scheme::Moments) points: 3 for d = 2, 19 for
-    /// d = 4, or 7 where that scheme falls back) with a unit vector `x` (length d) and must
+    /// d = 4), and at sampled points where their error estimate asks for them (see
+    /// [`predict_nonlinear_opts`](Self::predict_nonlinear_opts); the default tolerance 5e-4,
+    /// at most 20 000 calls, beyond that `Error::NotConverged`), with a unit vector `x` (length d) and must
     /// write the unit vector `a(x)` into its second argument (length d, unit within
     /// `UNIT_TOL`; it is then normalized). It returns `Err(message)` to signal failure. The
     /// sign of `a(x)` does not matter, and `a(−x) = ±a(x)` is the caller's contract (an
@@ -253,9 +255,10 @@ impl BinghamFilter {
     /// (moment matching), as in [`predict`](Self::predict). With `a` the identity this equals
     /// `predict` to rounding, since the points reproduce the state's second moment exactly.
     ///
-    /// Errors: those of [`predict`](Self::predict), and [`Error::Callback`] if `a` fails or
-    /// returns a non-finite or non-unit vector. On error the filter is unchanged. No heap
-    /// allocation (beyond what `a` does) once the noise is cached.
+    /// Errors: those of [`predict`](Self::predict), [`Error::Callback`] if `a` fails or
+    /// returns a non-finite or non-unit vector, `Error::NotConverged` if the tolerance is not
+    /// met within the budget. On error the filter is unchanged. No heap allocation (beyond what
+    /// `a` does) once the noise is cached.
     pub fn predict_nonlinear<F>(&mut self, mut a: F, m_w: &[f64], z_w: &[f64]) -> Result<()>
     where
         F: FnMut(&[f64], &mut [f64]) -> std::result::Result<(), String>,
@@ -314,18 +317,20 @@ impl BinghamFilter {
     ///    (effective share below [`MIN_CORRECTION_SHARE`]) or the approximation is sharper than
     ///    the moments can represent (`|z| > MAX_CONCENTRATION`).
     ///
-    /// Reliable where the posterior is close to a Bingham distribution: measured in
-    /// `tests/nonlinear.rs` against 10⁶-sample Monte Carlo references with a camera
-    /// likelihood (figures in `docs/accuracy.md`), the posterior mode agrees within the
-    /// references' standard errors for a prior of 0.14 rad spread and likelihoods of 1 to 0.1
-    /// times that spread; for a broad prior (0.42 rad) the posterior is visibly non-Bingham and
-    /// the fit's mode is off by up to 0.016 rad. A multimodal likelihood gets a single-mode fit.
-    /// At most [`MAX_TEMPERING_STEPS`] steps; beyond that `Error::NotConverged`. Calls of
-    /// `log_l`: `(steps + CORRECTION_PASSES) × samples`: 57 for a Bingham likelihood (d = 4),
-    /// 57–190 for the camera likelihoods of the tests.
+    /// 3. **Sampled check and correction** with the default options (see
+    ///    [`update_nonlinear_opts`](Self::update_nonlinear_opts)): randomized quasi-Monte Carlo
+    ///    importance sampling around the result, to 3 standard errors ≤ 2.5e-3 in every entry of
+    ///    the second moment and ≤ 0.05 spreads in the mode, or `Error::NotConverged` beyond
+    ///    20 000 calls.
     ///
-    /// Errors: [`Error::Callback`] (failure or a non-finite value), `NotConverged`, and the
-    /// moment-matching errors. On error the filter is unchanged. No heap allocation.
+    /// At most [`MAX_TEMPERING_STEPS`] steps; beyond that `Error::NotConverged`. Calls of
+    /// `log_l`: the deterministic part's `(steps + CORRECTION_PASSES) × samples` (57 for a
+    /// Bingham likelihood, d = 4) plus at least 128 sampled points; measured counts in
+    /// `docs/accuracy.md` (nonlinear models).
+    ///
+    /// Errors: [`Error::Callback`] (failure or a non-finite value), `NotConverged` (tempering
+    /// or the tolerance not met within the budget), and the moment-matching errors. On error the
+    /// filter is unchanged. No heap allocation.
     pub fn update_nonlinear<L>(&mut self, mut log_l: L) -> Result<()>
     where
         L: FnMut(&[f64]) -> std::result::Result<f64, String>,

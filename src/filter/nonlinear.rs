@@ -8,7 +8,9 @@ use super::nonlinear_options::{
 };
 use super::{Core, Mat, Vect, MAX_CONCENTRATION};
 use crate::canonical::UNIT_TOL;
-use crate::deterministic::{for_each_point, for_each_probe, plan, Reproduced, Scheme};
+use crate::deterministic::{
+    for_each_point, for_each_principal, for_each_probe, plan, Reproduced, Scheme,
+};
 use crate::distribution::bayes_product;
 use crate::error::{Error, Result};
 use crate::linalg::cholesky_solve;
@@ -229,46 +231,50 @@ impl<const D: usize> Core<D> {
         let mut low = Mat::<D>::zeros();
         let mut low_weight = 0.0;
         let mut mode_value = Vect::<D>::zeros();
-        for_each_point(
-            &self.m,
-            &p,
-            &grad,
-            &hess[..D * D],
-            &mut |x: &Vect<D>, wt: f64| {
-                if calls >= opts.max_calls {
-                    return Err(Error::NotConverged(format!(
-                        "nonlinear prediction: the call budget ({} calls) is smaller than the \
+        let m = self.m;
+        for_each_principal(&p, &grad, &hess[..D * D], |y: &[f64], wt: f64| {
+            if calls >= opts.max_calls {
+                return Err(Error::NotConverged(format!(
+                    "nonlinear prediction: the call budget ({} calls) is smaller than the \
                      {} deterministic points",
-                        opts.max_calls,
-                        p.count()
-                    )));
+                    opts.max_calls,
+                    p.count()
+                )));
+            }
+            // x = M y (normalized), as `for_each_point` builds it.
+            let mut x = Vect::<D>::zeros();
+            for (k, &yk) in y.iter().enumerate() {
+                if yk != 0.0 {
+                    x.axpy(yk, &m.column(k), 1.0);
                 }
-                let v = eval(x, calls)?;
-                calls += 1;
-                s.ger(wt, &v, &v, 1.0);
-                // A point on a principal axis (one non-mode coordinate) or the mode itself.
-                let y = self.m.transpose() * x;
-                let mut axis = None;
-                let mut off = 0;
-                for i in 0..D - 1 {
-                    if y[i].abs() > 1e-12 * y[D - 1].abs() {
-                        axis = Some(i);
-                        off += 1;
-                    }
+            }
+            let n = x.norm();
+            x /= n;
+            let v = eval(&x, calls)?;
+            calls += 1;
+            s.ger(wt, &v, &v, 1.0);
+            // The embedded rule: the mode and the points on one principal axis (one non-zero
+            // non-mode coordinate), weighted to carry E[y_i²] = ω_i per axis.
+            let mut axis = None;
+            let mut off = 0;
+            for (i, &yi) in y[..D - 1].iter().enumerate() {
+                if yi != 0.0 {
+                    axis = Some(i);
+                    off += 1;
                 }
-                match (off, axis) {
-                    (0, _) => mode_value = v,
-                    (1, Some(i)) => {
-                        // The two axis points together carry E[y_i²] = ω_i.
-                        let w = grad[i] / (2.0 * y[i] * y[i]);
-                        low.ger(w, &v, &v, 1.0);
-                        low_weight += w;
-                    }
-                    _ => {}
+            }
+            match (off, axis) {
+                (0, _) => mode_value = v,
+                (1, Some(i)) => {
+                    let yi = y[i] / n;
+                    let w = grad[i] / (2.0 * yi * yi);
+                    low.ger(w, &v, &v, 1.0);
+                    low_weight += w;
                 }
-                Ok(())
-            },
-        )?;
+                _ => {}
+            }
+            Ok(())
+        })?;
         low.ger(1.0 - low_weight, &mode_value, &mode_value, 1.0);
         let embedded = if p.reproduced() == Reproduced::FourthMoments {
             (s - low).abs().max()
