@@ -30,6 +30,7 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 #include "check.h"
@@ -223,6 +224,13 @@ static void test_ahrs() {
         a.update(Vector3d::Zero(), acc, mag);
         b.update({0, 0, 0}, {acc(0), acc(1), acc(2)}, {mag(0), mag(1), mag(2)});
     }
+    // `auto` is an Eigen::Quaterniond where Eigen is enabled (issue 23)
+    auto qa = a.quaternion();
+    static_assert(std::is_same<decltype(qa), Eigen::Quaterniond>::value, "Ahrs::quaternion() is Eigen");
+    static_assert(std::is_same<decltype(bingham::Filter(bingham::noise_from_angle_std_deg(4, 1.0)).mode_quaternion()),
+                               Eigen::Quaterniond>::value,
+                  "Filter::mode_quaternion() is Eigen");
+    CHECK(qa.angularDistance(q_true) < 0.01);
     const Quaterniond q = a.quaternion();
     double qc[4];
     CHECK_OK(bingham_ahrs_quaternion(a.get(), qc));
@@ -238,6 +246,43 @@ static void test_ahrs() {
     CHECK_OK(bingham_ahrs_gyro_bias_covariance(a.get(), cc));
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) CHECK(cov(i, j) == cc[3 * i + j]);
+    // the Eigen batch (n x 3 in, n x 4 out, the spreads) equals the vector batch and the
+    // per-sample spread
+    {
+        const int n = 50;
+        Eigen::MatrixXd gm(n, 3), am(n, 3), mm(n, 3);  // column-major in: any storage order
+        std::vector<double> gv, av, mv;
+        for (int k = 0; k < n; ++k) {
+            const Vector3d gk(0.01 * k, -0.02, 0.03);
+            gm.row(k) = gk.transpose();
+            am.row(k) = acc.transpose();
+            mm.row(k) = mag.transpose();
+            for (int c = 0; c < 3; ++c) {
+                gv.push_back(gk(c));
+                av.push_back(acc(c));
+                mv.push_back(mag(c));
+            }
+        }
+        bingham::Ahrs c1 = a.clone(), c2 = a.clone(), c3 = a.clone();
+        Eigen::VectorXd spread;
+        const auto qe = c1.update_batch(gm, am, mm, &spread);
+        const std::vector<double> qv = c2.update_batch(gv, av, mv);
+        CHECK(qe.rows() == n && qe.cols() == 4 && spread.size() == n);
+        bool same_q = true;
+        for (int k = 0; k < n; ++k)
+            for (int c = 0; c < 4; ++c) same_q = same_q && qe(k, c) == qv[4 * k + c];
+        CHECK(same_q);
+        CHECK(spread(n - 1) == c1.uncertainty());
+        const auto q6 = c3.update_batch(gm, am);  // without the magnetometer
+        CHECK(q6.rows() == n);
+        bool threw = false;
+        try {
+            (void)c3.update_batch(gm, Eigen::MatrixXd(n - 1, 3));
+        } catch (const bingham::Error &e) {
+            threw = e.status() == BINGHAM_ERR_INVALID_DIMENSION;
+        }
+        CHECK(threw);
+    }
     CHECK((cov - cov.transpose()).norm() <= 1e-12 * cov.norm() && cov.diagonal().minCoeff() > 0);
     const double bias_std = bingham::ahrs_default_params(0.01).bias_std;
     CHECK(bingham::Ahrs(0.01).gyro_bias_covariance_matrix() == Eigen::Matrix3d::Identity() * (bias_std * bias_std));

@@ -165,6 +165,18 @@ struct Quaternion {
 #endif
 };
 
+#if BINGHAM_HPP_EIGEN
+/// The type orientation estimates are returned as (Ahrs::quaternion(), Filter::mode_quaternion(),
+/// mode_quaternion()): Eigen::Quaterniond where Eigen is enabled, so that
+/// `auto q = ahrs.quaternion(); q.angularDistance(truth)` works; bingham::Quaternion otherwise.
+/// The two convert to each other implicitly (by w, x, y, z).
+using EstimateQuaternion = Eigen::Quaterniond;
+#else
+/// The type orientation estimates are returned as: bingham::Quaternion (Eigen::Quaterniond
+/// where Eigen is enabled).
+using EstimateQuaternion = Quaternion;
+#endif
+
 /// A Bingham distribution (M, z) on the unit sphere S^{d-1} in R^d: a plain value.
 ///
 /// `M` is d*d ROW-MAJOR (orthogonal; columns are the principal directions, column i belongs to
@@ -406,7 +418,7 @@ inline std::vector<double> mode(const Distribution &b) {
     return r;
 }
 /// The mode of a distribution of rotations (d = 4) as a quaternion.
-inline Quaternion mode_quaternion(const Distribution &b) {
+inline EstimateQuaternion mode_quaternion(const Distribution &b) {
     detail::require_dim(b.d == 4, "bingham::mode_quaternion", "needs d = 4");
     return Quaternion::from_array(mode(b).data());
 }
@@ -752,7 +764,7 @@ public:
         return r;
     }
     /// The estimate as a quaternion (d = 4), sign arbitrary (q and -q are the same rotation).
-    Quaternion mode_quaternion() const {
+    EstimateQuaternion mode_quaternion() const {
         require("bingham::Filter::mode_quaternion");
         detail::require_dim(d_ == 4, "bingham::Filter::mode_quaternion", "needs a d = 4 filter");
         return Quaternion::from_array(mode().data());
@@ -908,8 +920,43 @@ public:
             bingham_ahrs_update_batch(a_, n, gyr.data(), acc.data(), mag.empty() ? nullptr : mag.data(), q.data()));
         return q;
     }
-    /// The orientation estimate (sensor -> world ENU, w >= 0).
-    Quaternion quaternion() const {
+#if BINGHAM_HPP_EIGEN
+    /// n samples as Eigen matrices (gyr, acc, mag: n x 3, any storage order; an empty (0-row)
+    /// mag for none): returns the n x 4 quaternions (w, x, y, z per row). With `spread` non-null
+    /// it receives the n total angular spreads (rad, as uncertainty()) after each sample. A
+    /// refused sample throws; the samples before it have been processed.
+    template <class G, class A, class M>
+    Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> update_batch(
+        const Eigen::MatrixBase<G> &gyr, const Eigen::MatrixBase<A> &acc, const Eigen::MatrixBase<M> &mag,
+        Eigen::VectorXd *spread = nullptr) {
+        require("bingham::Ahrs::update_batch");
+        const Eigen::Index n = gyr.rows();
+        detail::require_dim(gyr.cols() == 3 && acc.cols() == 3 && acc.rows() == n &&
+                                (mag.rows() == 0 || (mag.rows() == n && mag.cols() == 3)),
+                            "bingham::Ahrs::update_batch", "gyr, acc (and mag) must all be n x 3");
+        using Rows3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+        const Rows3 g = gyr, a = acc, m = mag;
+        Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> q(n, 4);
+        if (spread) spread->resize(n);
+        if (n == 0) return q;
+        const double *mp = mag.rows() == 0 ? nullptr : m.data();
+        if (spread)
+            detail::check(bingham_ahrs_update_batch_spread(a_, static_cast<std::size_t>(n), g.data(), a.data(), mp,
+                                                           q.data(), spread->data()));
+        else
+            detail::check(bingham_ahrs_update_batch(a_, static_cast<std::size_t>(n), g.data(), a.data(), mp, q.data()));
+        return q;
+    }
+    /// As above without a magnetometer.
+    template <class G, class A>
+    Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> update_batch(
+        const Eigen::MatrixBase<G> &gyr, const Eigen::MatrixBase<A> &acc, Eigen::VectorXd *spread = nullptr) {
+        return update_batch(gyr, acc, Eigen::Matrix<double, 0, 3>(), spread);
+    }
+#endif
+    /// The orientation estimate (sensor -> world ENU, w >= 0); an Eigen::Quaterniond where Eigen
+    /// is enabled (see EstimateQuaternion).
+    EstimateQuaternion quaternion() const {
         require("bingham::Ahrs::quaternion");
         double q[4];
         detail::check(bingham_ahrs_quaternion(a_, q));
