@@ -112,7 +112,7 @@ static void test_vector_observation(void) {
             }
     /* non-unit: just outside / inside the tolerance, zero vector, huge */
     for (int which = 0; which < 2; ++which) {
-        const double scales[4] = {1 + 1e-4, 1 - 1e-4, 0.0, 1e300};
+        const double scales[4] = {1 + 2e-3, 1 - 2e-3, 0.0, 1e300}; /* beyond BINGHAM_UNIT_TOL */
         for (int s = 0; s < 4; ++s) {
             double bb[3], rr[3];
             memcpy(bb, b, sizeof bb);
@@ -308,7 +308,7 @@ static void test_filter_vector(void) {
                 memcpy(rr, r, sizeof rr);
                 double *t = which ? rr : bb;
                 if (v < 3) t[i] = bad[v];
-                else for (int k = 0; k < 3; ++k) t[k] *= 1 + 1e-4; /* non-unit */
+                else for (int k = 0; k < 3; ++k) t[k] *= 1 + 2e-3; /* non-unit (beyond BINGHAM_UNIT_TOL) */
                 CHECK_STATUS(bingham_filter_update_vector(f, bb, rr, 5.0), BINGHAM_ERR_INVALID_ARGUMENT);
                 check_msg(fu, which ? "reference" : "body");
                 CHECK_STATUS(bingham_filter_log_likelihood_vector(f, bb, rr, 5.0, &out), BINGHAM_ERR_INVALID_ARGUMENT);

@@ -274,7 +274,7 @@ static int transition_cb(const double *x_in, double *x_out, void *user_data) {
     case T_FAIL: return 1;
     case T_NAN: y(0) = std::numeric_limits<double>::quiet_NaN(); break;
     case T_INF: y(c->d - 1) = -std::numeric_limits<double>::infinity(); break;
-    case T_NON_UNIT: y *= 1.001; break;
+    case T_NON_UNIT: y *= 1.01; /* beyond BINGHAM_UNIT_TOL = 1e-3 */ break;
     case T_NOTHING: return 0;
     default: break;
     }

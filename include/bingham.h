@@ -78,9 +78,11 @@
 #define BINGHAM_ORTHOGONALITY_TOL 1e-6
 
 /**
- * Tolerance on |‖x‖ − 1| when a unit vector is expected (points of the sphere, quaternions).
+ * Tolerance on |‖x‖ − 1| when a unit vector is expected (points of the sphere, quaternions):
+ * within it the vector is normalized (a quaternion rounded to 4 or 5 decimals is accepted),
+ * beyond it refused with `BINGHAM_ERR_INVALID_ARGUMENT` ("normalize it first").
  */
-#define BINGHAM_UNIT_TOL 1e-6
+#define BINGHAM_UNIT_TOL 1e-3
 
 /**
  * Scheme of `bingham_deterministic_samples()`: the TAC 2016 points (Gilitschenski, Kurz,

@@ -16,8 +16,11 @@ pub const ORTHOGONALITY_TOL: f64 = 1e-6;
 /// Largest `max |MᵀM − I|` (8ε) for which a user-supplied `M` is kept without
 /// re-orthonormalization.
 const ORTHONORMAL_AS_IS: f64 = 8.0 * f64::EPSILON;
-/// Largest accepted `|‖x‖ − 1|` for a user-supplied unit vector; it is then normalized.
-pub const UNIT_TOL: f64 = 1e-6;
+/// Largest accepted `|‖x‖ − 1|` for a user-supplied unit vector; it is then normalized. 1e-3:
+/// a quaternion written with 4 or 5 decimals (a CSV, a log, a config file) is off unit length by
+/// up to about 1e-4 and is harmlessly normalized, while a vector that is not a unit vector at
+/// all (an unnormalized direction, a wrong field, a rate in place of an angle) is refused.
+pub const UNIT_TOL: f64 = 1e-3;
 
 /// Sorts `z` ascending (moving the columns of `m` along, stable for ties), shifts it so
 /// `z[d−1] = 0` and re-orthonormalizes `m`. No validation: for finite parameters, `m`
@@ -133,7 +136,8 @@ where
     let n = x.iter().map(|v| v * v).sum::<f64>().sqrt();
     if n.is_nan() || (n - 1.0).abs() > UNIT_TOL {
         return Err(Error::InvalidArgument(format!(
-            "`{what}` must be a unit vector: its norm is {n} (tolerance {UNIT_TOL})"
+            "`{what}` must be a unit vector: its norm is {n}, more than {UNIT_TOL} from 1 \
+             (normalize it first; within the tolerance the library normalizes it)"
         )));
     }
     Ok(Vector::from_fn_generic(d, U1, |i, _| x[i] / n))

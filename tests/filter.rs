@@ -430,7 +430,7 @@ fn failed_calls_change_nothing() {
         inf_z[0] = f64::NEG_INFINITY;
         let short = &sc.zw[..d - 1];
         let long_m = [sc.mw.clone(), vec![0.0]].concat();
-        let nonunit: Vec<f64> = sc.x0.iter().map(|v| v * (1.0 + 2e-6)).collect();
+        let nonunit: Vec<f64> = sc.x0.iter().map(|v| v * (1.0 + 2e-3)).collect();
         let nan_x: Vec<f64> = sc.x0.iter().map(|_| f64::NAN).collect();
         let zero = vec![0.0; d];
         // finite, but z − max z overflows

@@ -20,7 +20,7 @@ from typing import Iterator, Optional, Tuple
 MIN_DIM = 2
 MAX_DIM = 64
 ORTHOGONALITY_TOL = 1e-6
-UNIT_TOL = 1e-6
+UNIT_TOL = 1e-3
 
 
 _D = ctypes.POINTER(ctypes.c_double)

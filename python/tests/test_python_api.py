@@ -346,3 +346,24 @@ def test_scipy_rotation_agrees():
     except TypeError:
         return
     np.testing.assert_allclose(direct.as_matrix(), rodrigues(q), atol=1e-12)
+
+
+def test_quaternions_read_with_few_decimals_are_normalized_and_gross_errors_refused():
+    """BINGHAM_UNIT_TOL = 1e-3 (issue 23): a fix rounded to 4 decimals is accepted (normalized);
+    one 1 % off unit length is refused with "normalize it first"."""
+    rng = np.random.default_rng(5)
+    m = np.eye(4)[:, [1, 2, 3, 0]]
+    z = np.array([-100.0, -100.0, -100.0, 0.0])
+    for _ in range(200):
+        q = rng.standard_normal(4)
+        q /= np.linalg.norm(q)
+        with bh.Filter(m, z) as f, bh.Filter(m, z) as g:
+            f.update(np.round(q, 4), m, z)
+            g.update(q, m, z)
+            # the rounding moves the fix by at most ~1e-4: the posteriors agree to that
+            assert abs(abs(f.mode() @ g.mode()) - 1) < 1e-6
+    with bh.Filter(m, z) as f:
+        with pytest.raises(bh.BinghamError) as e:
+            f.update(1.01 * q, m, z)
+        assert e.value.status == bh.Status.ERR_INVALID_ARGUMENT
+        assert "normalize it first" in e.value.message

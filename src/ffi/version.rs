@@ -19,8 +19,10 @@ pub const BINGHAM_MAX_DIM: usize = 64;
 /// 8 ulps, as every matrix the library returns, so a returned state handed back reproduces itself
 /// bit for bit).
 pub const BINGHAM_ORTHOGONALITY_TOL: f64 = 1e-6;
-/// Tolerance on |‖x‖ − 1| when a unit vector is expected (points of the sphere, quaternions).
-pub const BINGHAM_UNIT_TOL: f64 = 1e-6;
+/// Tolerance on |‖x‖ − 1| when a unit vector is expected (points of the sphere, quaternions):
+/// within it the vector is normalized (a quaternion rounded to 4 or 5 decimals is accepted),
+/// beyond it refused with `BINGHAM_ERR_INVALID_ARGUMENT` ("normalize it first").
+pub const BINGHAM_UNIT_TOL: f64 = 1e-3;
 
 static VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "\0");
 

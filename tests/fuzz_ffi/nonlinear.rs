@@ -242,8 +242,9 @@ fn transition_ctx(rng: &mut Rng64, d: usize) -> CbCtx {
             1 => CbBad::Nan(rng.below(4)),
             2 => CbBad::Inf(rng.below(4), if rng.chance(0.5) { 1.0 } else { -1.0 }),
             3 => CbBad::Scale(match rng.below(4) {
-                0 => 1.0 + rng.log_uniform(-5.0, 0.0),
-                1 => 1.0 - rng.log_uniform(-5.0, -0.1),
+                // beyond BINGHAM_UNIT_TOL = 1e-3
+                0 => 1.0 + rng.log_uniform(-2.9, 0.0),
+                1 => 1.0 - rng.log_uniform(-2.9, -0.1),
                 2 => rng.log_uniform(10.0, 300.0),
                 _ => rng.log_uniform(-320.0, -10.0),
             }),
