@@ -50,6 +50,23 @@ struct EvaluatedPoints<const D: usize> {
     n: usize,
 }
 
+/// `log_l(x)`, with a failure or a non-finite value turned into [`Error::Callback`] naming the
+/// point and `stage`.
+fn checked_log_l<L>(log_l: &mut L, x: &[f64], stage: std::fmt::Arguments<'_>) -> Result<f64>
+where
+    L: FnMut(&[f64]) -> std::result::Result<f64, String>,
+{
+    let l = log_l(x).map_err(|msg| {
+        Error::Callback(format!("log-likelihood failed at {x:?} ({stage}): {msg}"))
+    })?;
+    if !l.is_finite() {
+        return Err(Error::Callback(format!(
+            "log-likelihood returned {l} at {x:?}: not finite"
+        )));
+    }
+    Ok(l)
+}
+
 /// The deterministic prediction is accepted where the embedded rule's difference is below this
 /// fraction of the tolerance (see [`NonlinearMethod::Deterministic`]).
 const EMBEDDED_MARGIN: f64 = 0.1;
@@ -347,18 +364,11 @@ impl<const D: usize> Core<D> {
     {
         out.n = 0;
         Self::visit_points_and_probes(m, z, true, |x, wt| {
-            let l = log_l(x.as_slice()).map_err(|msg| {
-                Error::Callback(format!(
-                    "log-likelihood failed at {x:?} (linearization {iteration}): {msg}",
-                    x = x.as_slice()
-                ))
-            })?;
-            if !l.is_finite() {
-                return Err(Error::Callback(format!(
-                    "log-likelihood returned {l} at {x:?}: not finite",
-                    x = x.as_slice()
-                )));
-            }
+            let l = checked_log_l(
+                log_l,
+                x.as_slice(),
+                format_args!("linearization {iteration}"),
+            )?;
             let k = out.n;
             out.x[k] = *x;
             out.w[k] = wt.abs();
@@ -513,21 +523,8 @@ impl<const D: usize> Core<D> {
             Err(e) => return Err(e),
         };
 
-        let mut checked = |x: &Vect<D>| -> Result<f64> {
-            let l = log_l(x.as_slice()).map_err(|msg| {
-                Error::Callback(format!(
-                    "log-likelihood failed at {x:?} (sampled check): {msg}",
-                    x = x.as_slice()
-                ))
-            })?;
-            if !l.is_finite() {
-                return Err(Error::Callback(format!(
-                    "log-likelihood returned {l} at {x:?}: not finite",
-                    x = x.as_slice()
-                )));
-            }
-            Ok(l)
-        };
+        let mut checked =
+            |x: &Vect<D>| checked_log_l(log_l, x.as_slice(), format_args!("sampled check"));
         let (m, z, report) = self.sampled_update(m, z, &mut checked, opts, &mut calls)?;
         self.m = m;
         self.z = z;

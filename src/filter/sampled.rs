@@ -23,7 +23,7 @@ use super::nonlinear_options::{
 use super::rqmc::{
     mean_and_error, outer_packed, packed, shifts, unpack, Acg, Sobol, WeightedSums, REPLICATES,
 };
-use super::{Core, Mat, Vect};
+use super::{Core, Mat, Vect, MAX_CONCENTRATION};
 use crate::distribution::omega;
 use crate::error::{Error, Result};
 use crate::linalg::congruence;
@@ -188,7 +188,15 @@ impl<const D: usize> Core<D> {
                         samples: done * REPLICATES,
                         effective_share: share,
                     };
-                    return match fit_second_moment(&s, None) {
+                    // An approximation sharper than MAX_CONCENTRATION was sampled through its
+                    // capped envelope: refitting the moment would cap the result too, so the
+                    // approximation itself stands where the correction allows it (below).
+                    let refit = if qz[0] < -MAX_CONCENTRATION {
+                        Err(Error::Numerical("sharper than the sampled envelope".into()))
+                    } else {
+                        fit_second_moment(&s, None)
+                    };
+                    return match refit {
                         Ok((m_new, z_new, _)) => Ok((m_new, z_new, report)),
                         // The corrected moment is not positive definite: the posterior is so
                         // concentrated that the estimate's noise reaches its smallest
