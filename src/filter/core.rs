@@ -115,6 +115,18 @@ impl<const D: usize> Core<D> {
         z_v: &[f64],
     ) -> Result<f64> {
         let zhat = unit("measurement", Const::<D>, measurement)?;
+        self.log_likelihood_with(m_v, z_v, |noise_m| Self::likelihood_m(&zhat, noise_m))
+    }
+
+    /// The predictive log density of an observation whose likelihood has the measurement
+    /// noise's concentrations along the directions `likelihood_m(M_v)`: the noise taken from the
+    /// cache if it is there (built, not stored, otherwise: `&self`), minus its `log F`.
+    pub(super) fn log_likelihood_with(
+        &self,
+        m_v: &[f64],
+        z_v: &[f64],
+        likelihood_m: impl Fn(&Mat<D>) -> Mat<D>,
+    ) -> Result<f64> {
         let built;
         let noise = match self.measurement.lookup(m_v, z_v) {
             Some(n) => n,
@@ -123,16 +135,8 @@ impl<const D: usize> Core<D> {
                 &built
             }
         };
-        let log_f_noise = *noise
-            .log_f
-            .get_or_init(|| log_f_omega(&noise.z).map_or(f64::NAN, |r| r.0));
-        if !log_f_noise.is_finite() {
-            return Err(Error::Numerical(
-                "log-likelihood: log F of the measurement noise is not finite".into(),
-            ));
-        }
-        let ml = Self::likelihood_m(&zhat, &noise.m);
-        let p = congruence(&ml, &noise.z);
+        let log_f_noise = noise.log_f()?;
+        let p = congruence(&likelihood_m(&noise.m), &noise.z);
         let value = self.log_likelihood_precision(&p)? - log_f_noise;
         if !value.is_finite() {
             return Err(Error::Numerical(format!(
@@ -142,28 +146,9 @@ impl<const D: usize> Core<D> {
         Ok(value)
     }
 
-    /// `log ∫ f_state(x) exp(xᵀ P x) dx` (surface measure): with `λ` the largest eigenvalue of
-    /// `M Z Mᵀ + P`, `log F(eig − λ) + λ − log F(Z)`.
+    /// `log ∫ f_state(x) exp(xᵀ P x) dx` (surface measure), see [`log_evidence`].
     pub(super) fn log_likelihood_precision(&self, p: &Mat<D>) -> Result<f64> {
-        let (_, l) = product_eigen_precision(&self.m, &self.z, p)?;
-        let top = l[D - 1];
-        let zp = l.map(|v| v - top);
-        // As in the update: the posterior's concentrations may overflow (a state or noise near
-        // the largest double); that is a numerical failure, not an invalid argument.
-        if !zp.iter().all(|v| v.is_finite()) {
-            return Err(Error::Numerical(
-                "log-likelihood: the posterior concentrations are not finite".into(),
-            ));
-        }
-        let (lf_post, _) = log_f_omega(&zp)?;
-        let (lf_state, _) = log_f_omega(&self.z)?;
-        let value = lf_post + top - lf_state;
-        if !value.is_finite() {
-            return Err(Error::Numerical(format!(
-                "log-likelihood is not finite ({value})"
-            )));
-        }
-        Ok(value)
+        log_evidence(&self.m, &self.z, p)
     }
 
     pub(super) fn angular_spread_into(&self, out: &mut [f64]) -> Result<()> {
@@ -257,8 +242,37 @@ fn composed<const D: usize>(
         Some(u) => right(Const::<D>, u.as_slice()) * m,
         None => *m,
     };
-    let w = omega(&capped(z))?;
-    let a = congruence(&m, &w);
+    let a = composed_moment(&m, z)?;
     let c = compose_moments(&a, &noise.moment);
     fit_second_moment(&c, warm)
+}
+
+/// The second moment `M diag(ω(z)) Mᵀ` a composition uses (concentrations capped at
+/// `MAX_CONCENTRATION`, see the module documentation of `filter`).
+pub(crate) fn composed_moment<const D: usize>(m: &Mat<D>, z: &Vect<D>) -> Result<Mat<D>> {
+    Ok(congruence(m, &omega(&capped(z))?))
+}
+
+/// `log ∫ f(x) exp(xᵀ P x) dx` (surface measure) for `f = Bingham(M, Z)`: with `λ` the largest
+/// eigenvalue of `M Z Mᵀ + P`, `log F(eig − λ) + λ − log F(Z)`.
+pub(crate) fn log_evidence<const D: usize>(m: &Mat<D>, z: &Vect<D>, p: &Mat<D>) -> Result<f64> {
+    let (_, l) = product_eigen_precision(m, z, p)?;
+    let top = l[D - 1];
+    let zp = l.map(|v| v - top);
+    // As in the update: the posterior's concentrations may overflow (a state or noise near
+    // the largest double); that is a numerical failure, not an invalid argument.
+    if !zp.iter().all(|v| v.is_finite()) {
+        return Err(Error::Numerical(
+            "log-likelihood: the posterior concentrations are not finite".into(),
+        ));
+    }
+    let (lf_post, _) = log_f_omega(&zp)?;
+    let (lf_state, _) = log_f_omega(z)?;
+    let value = lf_post + top - lf_state;
+    if !value.is_finite() {
+        return Err(Error::Numerical(format!(
+            "log-likelihood is not finite ({value})"
+        )));
+    }
+    Ok(value)
 }

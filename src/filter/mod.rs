@@ -39,6 +39,8 @@ mod nonlinear;
 mod nonlinear_options;
 mod rqmc;
 mod sampled;
+mod spin;
+mod world;
 
 use nalgebra::{Matrix4, SMatrix, SVector};
 
@@ -54,6 +56,7 @@ pub use nonlinear_options::{
     NonlinearMethod, NonlinearOptions, NonlinearReport, DEFAULT_MAX_CALLS, DEFAULT_MODE_TOLERANCE,
     DEFAULT_PREDICT_TOLERANCE, DEFAULT_UPDATE_TOLERANCE,
 };
+pub use spin::SpinFilter;
 
 /// A `D×D` matrix on the stack.
 type Mat<const D: usize> = SMatrix<f64, D, D>;
@@ -207,6 +210,37 @@ impl BinghamFilter {
     /// Arguments and errors as for [`BinghamFilter::update`].
     pub fn log_likelihood(&self, measurement: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<f64> {
         dispatch!(&self.inner, c => c.log_likelihood(measurement, m_v, z_v))
+    }
+
+    /// World-frame prediction (Glover & Kaelbling 2013): the state becomes the distribution of
+    /// `w ∘ u ∘ x` (`q ∘ r` = the Hamilton product `q r`, rotate by `r`, then by `q`), with
+    /// `w ~ Bingham(m_w, z_w)` and a known unit `u` (length `d`, or `None`: the identity) acting
+    /// on the left, in the world frame — where [`predict_rotation`](Self::predict_rotation)
+    /// composes on the right (`x ⊕ u ⊕ w`, body frame). The rotation is exact
+    /// (`u ∘ x ~ Bingham(L(u) M, Z)`), the composition's second moment exact, the new state its
+    /// moment-matching fit. For d = 2 (commutative) it equals `predict_rotation`; for d = 4 the
+    /// two agree when the noise is isotropic.
+    ///
+    /// Arguments and errors as for [`predict_rotation`](Self::predict_rotation).
+    pub fn predict_world(&mut self, u: Option<&[f64]>, m_w: &[f64], z_w: &[f64]) -> Result<()> {
+        dispatch!(&mut self.inner, c => c.predict_world(u, m_w, z_w))
+    }
+
+    /// World-frame update: conditions on `y = v ∘ x`, `v ~ Bingham(m_v, z_v)` (the noise on the
+    /// left, in the world frame; [`update`](Self::update) has `x ⊕ v`). The likelihood
+    /// `f_v(y ∘ x⁻¹)` is the Bingham density in `x` with directions `m̄_i ∘ y` (`M_L = R(y) D
+    /// M_v`), so the posterior is the exact Bayes product.
+    ///
+    /// Arguments (the measurement named `y`) and errors as for [`update`](Self::update).
+    pub fn update_world(&mut self, y: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<()> {
+        dispatch!(&mut self.inner, c => c.update_world(y, m_v, z_v))
+    }
+
+    /// The natural logarithm of the predictive density of `y = v ∘ x` under the current
+    /// estimate (surface measure on the sphere, as in [`log_likelihood`](Self::log_likelihood)),
+    /// the world-frame counterpart of `log_likelihood`. The filter is not changed.
+    pub fn log_likelihood_world(&self, y: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<f64> {
+        dispatch!(&self.inner, c => c.log_likelihood_world(y, m_v, z_v))
     }
 
     /// Measurement update (d = 4) with a measured direction: `body` (sensor frame, unit) of the

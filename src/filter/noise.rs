@@ -7,8 +7,8 @@ use std::sync::OnceLock;
 
 use super::{Mat, Vect, MAX_CONCENTRATION};
 use crate::canonical::params_row_major;
-use crate::distribution::omega;
-use crate::error::Result;
+use crate::distribution::{log_f_omega, omega};
+use crate::error::{Error, Result};
 use crate::linalg::congruence;
 
 /// A validated, normalized noise distribution with the quantities the filter needs.
@@ -16,7 +16,8 @@ use crate::linalg::congruence;
 pub(crate) struct Noise<const D: usize> {
     pub(super) m: Mat<D>,
     pub(super) z: Vect<D>,
-    /// Process noise: the second moment (of the capped concentrations). Measurement noise: unused.
+    /// Process and observation noise: the second moment (of the capped concentrations).
+    /// Measurement noise: unused.
     pub(super) moment: Mat<D>,
     /// Measurement noise: `log F(z)`, evaluated on the first `log_likelihood` (NaN if it could
     /// not be evaluated; the update does not need it, so it neither pays for it nor fails on
@@ -29,10 +30,29 @@ pub(crate) struct Noise<const D: usize> {
 pub(super) enum Role {
     Process,
     Measurement,
+    /// The spin filter's observation noise: named `m_o`, `z_o`; it needs the second moment
+    /// (for the spin's likelihood) and `log F` (for the predictive density).
+    Observation,
 }
 
 /// Longest key: `d² + d` for `d = 4`.
 const KEY_LEN: usize = 20;
+
+impl<const D: usize> Noise<D> {
+    /// `log F(z)`, evaluated once (see [`Noise::log_f`]); an error if it is not finite.
+    pub(super) fn log_f(&self) -> Result<f64> {
+        let v = *self
+            .log_f
+            .get_or_init(|| log_f_omega(&self.z).map_or(f64::NAN, |r| r.0));
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(Error::Numerical(
+                "log-likelihood: log F of the measurement noise is not finite".into(),
+            ))
+        }
+    }
+}
 
 /// One cached noise, keyed on the bit patterns of the caller's `m` and `z`.
 #[derive(Debug, Clone, PartialEq)]
@@ -78,9 +98,10 @@ impl<const D: usize> NoiseCache<D> {
         let (mm, zz) = match role {
             Role::Process => params_row_major(Const::<D>, "m_w", m, "z_w", z)?,
             Role::Measurement => params_row_major(Const::<D>, "m_v", m, "z_v", z)?,
+            Role::Observation => params_row_major(Const::<D>, "m_o", m, "z_o", z)?,
         };
         let moment = match role {
-            Role::Process => {
+            Role::Process | Role::Observation => {
                 let w = omega(&capped(&zz))?;
                 congruence(&mm, &w)
             }

@@ -1,0 +1,283 @@
+//! The second-order quaternion Bingham filter of Glover & Kaelbling (2013, Sec. 4): the
+//! orientation `x` and the spin `v` (the rotation per step) of an object observed without a
+//! gyroscope, e.g. by a camera.
+//!
+//! Process and observation (`q ∘ r` = Hamilton product `q r`: rotate by `r`, then by `q`):
+//! `v_n = w_n ∘ u_n ∘ v_{n−1}`, `x_n = v_{n−1} ∘ x_{n−1}`, `y_n = o_n ∘ x_n`, with Bingham
+//! noises `w_n` (process, on the spin) and `o_n` (observation). The joint posterior is carried as
+//! the product of two Bingham marginals `B_x · B_v` (the paper's assumption: `x` and `v`
+//! independent given the data). One step, from the marginals of step `n − 1`:
+//!
+//! 1. orientation: prior `B_v ∘ B_x` (the composition's exact second moment, moment matched),
+//!    times `f(y | x) = Bingham(x; Z_o, R(y) D M_o)` (exact Bayes product);
+//! 2. spin: the observation's evidence about `v_{n−1}` is `g(v) = ∫ f(y | x) B_x(v⁻¹ ∘ x) dx`,
+//!    the density of `a ∘ b⁻¹` with `a ~ Bingham(Z_o, R(y) D M_o)` and `b ~ B_x`: a composition,
+//!    moment matched (the paper's `f_{y|x} ∘ B_x⁻¹`); `B_v · g` (exact Bayes product), rotated by
+//!    `u` on the left (exact) and composed with `w` (exact second moment, moment matched).
+//!
+//! Approximations: the product of marginals, and the three moment matchings (each keeps the
+//! exact second moment of the composition it replaces). Derivation and measurements:
+//! `docs/design.md` (§ "World-frame steps and the spin filter"), `docs/accuracy.md` (§ "Spin").
+
+use nalgebra::Const;
+
+use super::core::{composed_moment, log_evidence};
+use super::noise::{NoiseCache, Role};
+use super::world::{conjugation, world_likelihood_m};
+use super::{Mat, Vect};
+use crate::canonical::{params_row_major, unit};
+use crate::distribution::{bayes_product, Bingham};
+use crate::error::{Error, Result};
+use crate::linalg::{congruence, write_row_major};
+use crate::mle::{fit_second_moment, Derivs};
+use crate::quaternion::{compose_moments, left, right};
+
+/// One Bingham marginal: `M` (orthonormal columns, the last the mode) and `z` (ascending,
+/// `z[3] = 0`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Marginal {
+    m: Mat<4>,
+    z: Vect<4>,
+}
+
+impl Marginal {
+    fn from_slices(what_m: &str, m: &[f64], what_z: &str, z: &[f64]) -> Result<Self> {
+        let (m, z) = params_row_major(Const::<4>, what_m, m, what_z, z)?;
+        Ok(Marginal { m, z })
+    }
+
+    fn write(&self, m: &mut [f64], z: &mut [f64]) {
+        write_row_major(&self.m, m);
+        z.copy_from_slice(self.z.as_slice());
+    }
+
+    fn mode(&self) -> [f64; 4] {
+        let c = self.m.column(3);
+        [c[0], c[1], c[2], c[3]]
+    }
+}
+
+/// The moment-matching warm starts of the three compositions of a step.
+#[derive(Debug, Clone, Default)]
+struct Warm {
+    orientation: Option<Derivs<Const<4>>>,
+    evidence: Option<Derivs<Const<4>>>,
+    spin: Option<Derivs<Const<4>>>,
+}
+
+/// The second-order quaternion Bingham filter (orientation and spin, d = 4, quaternions scalar
+/// first), see the module documentation for the model.
+///
+/// Every method either succeeds or returns an error and leaves the filter as it was. The state
+/// lives on the stack; after the first step with given noises a step performs no heap
+/// allocation (the noises are validated once and cached on their parameters' bit patterns).
+/// `Send` and `Sync`; cloning gives an independent filter.
+#[derive(Debug, Clone)]
+pub struct SpinFilter {
+    x: Marginal,
+    v: Marginal,
+    warm: Warm,
+    process: NoiseCache<4>,
+    observation: NoiseCache<4>,
+}
+
+/// The observation's precision in `x` and the second moment of `a ~ Bingham(Z_o, R(y) D M_o)`.
+struct ObservationTerms {
+    precision: Mat<4>,
+    moment: Mat<4>,
+}
+
+impl SpinFilter {
+    /// A filter with the orientation prior `Bingham(m_x, z_x)` and the spin prior
+    /// `Bingham(m_v, z_v)` (each `m` 4×4 row-major orthogonal, `z` 4 concentrations in any order
+    /// and shift, as for [`super::BinghamFilter::new`]). `z_x = 0` (all equal) is the uniform
+    /// orientation prior: nothing known about the orientation.
+    ///
+    /// Errors: [`Error::InvalidDimension`] (lengths), [`Error::InvalidArgument`] (NaN/Inf, `m`
+    /// not orthogonal).
+    pub fn new(m_x: &[f64], z_x: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<SpinFilter> {
+        Ok(SpinFilter {
+            x: Marginal::from_slices("m_x", m_x, "z_x", z_x)?,
+            v: Marginal::from_slices("m_v", m_v, "z_v", z_v)?,
+            warm: Warm::default(),
+            process: NoiseCache::empty(),
+            observation: NoiseCache::empty(),
+        })
+    }
+
+    /// Replaces both marginals (validated as in [`SpinFilter::new`]); the noise caches are kept.
+    pub fn set_state(&mut self, m_x: &[f64], z_x: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<()> {
+        let x = Marginal::from_slices("m_x", m_x, "z_x", z_x)?;
+        let v = Marginal::from_slices("m_v", m_v, "z_v", z_v)?;
+        self.x = x;
+        self.v = v;
+        self.warm = Warm::default();
+        Ok(())
+    }
+
+    /// Copies the orientation marginal into `m_x` (16, row-major, the last column the mode),
+    /// `z_x` (4, ascending, last 0) and the spin marginal into `m_v`, `z_v`. Errors: wrong
+    /// lengths (nothing written).
+    pub fn state_into(
+        &self,
+        m_x: &mut [f64],
+        z_x: &mut [f64],
+        m_v: &mut [f64],
+        z_v: &mut [f64],
+    ) -> Result<()> {
+        for (name, len, want) in [
+            ("m_x", m_x.len(), 16),
+            ("z_x", z_x.len(), 4),
+            ("m_v", m_v.len(), 16),
+            ("z_v", z_v.len(), 4),
+        ] {
+            if len != want {
+                return Err(Error::InvalidDimension(format!(
+                    "`{name}` must have length {want}, got {len}"
+                )));
+            }
+        }
+        self.x.write(m_x, z_x);
+        self.v.write(m_v, z_v);
+        Ok(())
+    }
+
+    /// The orientation marginal.
+    pub fn orientation(&self) -> Bingham {
+        Bingham::from_normalized_parts(&self.x.m, &self.x.z)
+    }
+
+    /// The spin marginal (the rotation per step, `x_{n+1} = v ∘ x_n`).
+    pub fn spin(&self) -> Bingham {
+        Bingham::from_normalized_parts(&self.v.m, &self.v.z)
+    }
+
+    /// The orientation's mode, a unit quaternion (scalar first; `−q` is the same rotation).
+    pub fn orientation_mode(&self) -> [f64; 4] {
+        self.x.mode()
+    }
+
+    /// The spin's mode: the most probable rotation per step, a unit quaternion (scalar first).
+    pub fn spin_mode(&self) -> [f64; 4] {
+        self.v.mode()
+    }
+
+    /// One time step: `v ← w ∘ u ∘ v`, `x ← v ∘ x` with the process noise `w ~ Bingham(m_w,
+    /// z_w)` and the control `u` (unit within `UNIT_TOL`, or `None`: identity), and, when `y` is
+    /// `Some`, the observation `y = o ∘ x` with `o ~ Bingham(m_o, z_o)` (`m_o`, `z_o` are
+    /// ignored without `y`). See the module documentation for the algorithm.
+    ///
+    /// Errors: [`Error::InvalidDimension`] (lengths), [`Error::InvalidArgument`] (NaN/Inf,
+    /// non-orthogonal `m`, `u` or `y` not unit), [`Error::NotConverged`] /
+    /// [`Error::Numerical`] (moment matching, overflow). On error the filter is unchanged.
+    pub fn step(
+        &mut self,
+        u: Option<&[f64]>,
+        m_w: &[f64],
+        z_w: &[f64],
+        y: Option<&[f64]>,
+        m_o: &[f64],
+        z_o: &[f64],
+    ) -> Result<()> {
+        let u = u.map(|u| unit("u", Const::<4>, u)).transpose()?;
+        let y = y.map(|y| unit("y", Const::<4>, y)).transpose()?;
+        let w_moment = self.process.get(Role::Process, m_w, z_w)?.moment;
+        let obs = match y {
+            Some(y) => {
+                let o = self.observation.get(Role::Observation, m_o, z_o)?;
+                Some(observation_terms(&y, &o.m, &o.z, &o.moment))
+            }
+            None => None,
+        };
+
+        let ax = composed_moment(&self.x.m, &self.x.z)?;
+        let av = composed_moment(&self.v.m, &self.v.z)?;
+
+        // Orientation: x_n = v_{n−1} ∘ x_{n−1}, then the observation.
+        let (mxp, zxp, warm_x) =
+            fit_second_moment(&compose_moments(&av, &ax), self.warm.orientation.as_ref())?;
+        let x = match &obs {
+            Some(o) => {
+                let (m, z) = bayes_product(&mxp, &zxp, &o.precision)?;
+                Marginal { m, z }
+            }
+            None => Marginal { m: mxp, z: zxp },
+        };
+
+        // Spin: B_v · (f_{y|x} ∘ B_x⁻¹), then rotated by u and composed with w.
+        let (v_post, warm_g) = match &obs {
+            Some(o) => {
+                let d = conjugation::<4>();
+                let b_inv = d * ax * d;
+                let (mg, zg, warm_g) = fit_second_moment(
+                    &compose_moments(&o.moment, &b_inv),
+                    self.warm.evidence.as_ref(),
+                )?;
+                let (m, z) = bayes_product(&self.v.m, &self.v.z, &congruence(&mg, &zg))?;
+                (Marginal { m, z }, Some(warm_g))
+            }
+            None => (self.v, self.warm.evidence.clone()),
+        };
+        let mv = match u {
+            Some(u) => left(Const::<4>, u.as_slice()) * v_post.m,
+            None => v_post.m,
+        };
+        let a_post = composed_moment(&mv, &v_post.z)?;
+        let (mvn, zvn, warm_v) = fit_second_moment(
+            &compose_moments(&w_moment, &a_post),
+            self.warm.spin.as_ref(),
+        )?;
+
+        self.x = x;
+        self.v = Marginal { m: mvn, z: zvn };
+        self.warm = Warm {
+            orientation: Some(warm_x),
+            evidence: warm_g,
+            spin: Some(warm_v),
+        };
+        Ok(())
+    }
+
+    /// The natural logarithm of the predictive density of the observation `y = o ∘ x_n`,
+    /// `o ~ Bingham(m_o, z_o)`, before the step that would take it: `log ∫ f(y | x) (B_v ∘
+    /// B_x)(x) dx`, a density on the unit sphere S³ (surface measure, antipodally symmetric),
+    /// the quantity a bank of filters sums over time, and what picks between two
+    /// interpretations of an ambiguous observation. The filter is not changed.
+    ///
+    /// Errors: as for [`SpinFilter::step`]'s observation.
+    pub fn log_likelihood(&self, y: &[f64], m_o: &[f64], z_o: &[f64]) -> Result<f64> {
+        let y = unit("y", Const::<4>, y)?;
+        let built;
+        let o = match self.observation.lookup(m_o, z_o) {
+            Some(o) => o,
+            None => {
+                built = NoiseCache::<4>::build(Role::Observation, m_o, z_o)?;
+                &built
+            }
+        };
+        let log_f_o = o.log_f()?;
+        let ax = composed_moment(&self.x.m, &self.x.z)?;
+        let av = composed_moment(&self.v.m, &self.v.z)?;
+        let (mxp, zxp, _) =
+            fit_second_moment(&compose_moments(&av, &ax), self.warm.orientation.as_ref())?;
+        let p = congruence(&world_likelihood_m(&y, &o.m), &o.z);
+        let value = log_evidence(&mxp, &zxp, &p)? - log_f_o;
+        if !value.is_finite() {
+            return Err(Error::Numerical(format!(
+                "log-likelihood is not finite ({value})"
+            )));
+        }
+        Ok(value)
+    }
+}
+
+/// The observation's exponent in `x` (`M_L Z_o M_Lᵀ`, `M_L = R(y) D M_o`) and the second moment
+/// of `Bingham(Z_o, M_L)` (`R(y) D S_o D R(y)ᵀ` from the noise's moment `S_o`).
+fn observation_terms(y: &Vect<4>, m_o: &Mat<4>, z_o: &Vect<4>, s_o: &Mat<4>) -> ObservationTerms {
+    let ml = world_likelihood_m(y, m_o);
+    let r = right(Const::<4>, y.as_slice()) * conjugation::<4>();
+    ObservationTerms {
+        precision: congruence(&ml, z_o),
+        moment: r * s_o * r.transpose(),
+    }
+}
