@@ -267,6 +267,36 @@ typedef struct bingham_ahrs bingham_ahrs;
 typedef struct bingham_filter bingham_filter;
 
 /**
+ * The second-order quaternion Bingham filter of Glover & Kaelbling (2013): the orientation `x`
+ * and the spin `v` (the rotation per time step) of an object observed without a gyroscope,
+ * e.g. by a camera.
+ *
+ * An opaque handle: create it with `bingham_spin_filter_new()` (or
+ * `bingham_spin_filter_clone()`), release it with `bingham_spin_filter_free()`. The caller owns
+ * it.
+ *
+ * Model (quaternions scalar first `(w, x, y, z)`; `q ∘ r` is the Hamilton product `q r`,
+ * "rotate by r, then by q"): `v[n] = w[n] ∘ u[n] ∘ v[n-1]`, `x[n] = v[n-1] ∘ x[n-1]`,
+ * `y[n] = o[n] ∘ x[n]`, with Bingham noises `w` (process, on the spin) and `o` (observation),
+ * and an optional known control `u` (a change of spin). The state is the product of two
+ * Bingham marginals, orientation `(M_x, z_x)` and spin `(M_v, z_v)` (4 x 4 row-major with
+ * orthonormal columns, the last column the mode; z ascending, `z[3] = 0`). A step: the
+ * orientation's prior is the composition `B_v ∘ B_x`, times the observation's likelihood
+ * (exact product); the spin is multiplied by the observation's evidence about it (the
+ * composition of the likelihood with the inverse of the previous orientation), then rotated by
+ * `u` and composed with `w`. Approximations: the product of marginals, and moment matching of
+ * each composition (exact in the second moment). Derivation in `docs/design.md`.
+ *
+ * Thread safety: a handle may be used by one thread at a time (functions taking
+ * `bingham_spin_filter *` modify it; functions taking `const bingham_spin_filter *` may run
+ * concurrently on the same handle). Different handles are independent; no global state.
+ *
+ * Memory: after the first step with given noise parameters (cached inside the handle, keyed
+ * on their bit patterns), a step performs no heap allocation.
+ */
+typedef struct bingham_spin_filter bingham_spin_filter;
+
+/**
  * The transition function `a` of `bingham_filter_predict_nonlinear()` (system model
  * `x[k+1] = a(x[k]) (+) w[k]`).
  *
@@ -1331,6 +1361,79 @@ enum bingham_status bingham_filter_log_likelihood_vector(const struct bingham_fi
 enum bingham_status bingham_filter_angular_spread(const struct bingham_filter *f, double *spread);
 
 /**
+ * World-frame prediction (Glover & Kaelbling 2013): the state becomes the distribution of
+ * `w ∘ u ∘ x`, `w ~ Bingham(m_w, z_w)`, where `q ∘ r` is the Hamilton product `q r` ("rotate by
+ * r, then by q"): the control `u` and the noise act on the left, in the world frame.
+ * `bingham_filter_predict_rotation()` composes on the right (`x (+) u (+) w`, body frame); the
+ * two agree for d = 2 (complex multiplication commutes) and, without `u`, for a noise that is
+ * isotropic about the identity.
+ *
+ * - `u`: d entries, unit length (within `BINGHAM_UNIT_TOL`, then normalized), applied exactly
+ *   (`u ∘ x ~ Bingham(L(u) M, z)`); `NULL` means the identity.
+ * - `m_w`, `z_w`: the noise, as in `bingham_filter_predict()` (cached the same way).
+ *
+ * Exact in the second moment (the composition's second moment is exact, the new state its
+ * moment-matched Bingham), like `bingham_filter_predict()`.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `m_w`, `z_w`), `BINGHAM_ERR_INVALID_ARGUMENT`
+ * (NaN/Inf, `u` not unit, `m_w` not orthogonal), `BINGHAM_ERR_NOT_CONVERGED` /
+ * `BINGHAM_ERR_NUMERICAL` (moment matching). On error the filter is unchanged.
+ *
+ * # Safety
+ * `f`: a live handle; `u`: `NULL` or d readable doubles; `m_w`: d*d and `z_w`: d readable
+ * doubles.
+ */
+enum bingham_status bingham_filter_predict_world(struct bingham_filter *f,
+                                                 const double *u,
+                                                 const double *m_w,
+                                                 const double *z_w);
+
+/**
+ * World-frame update (exact Bayes product): conditions the state on `y = v ∘ x`,
+ * `v ~ Bingham(m_v, z_v)` (the noise on the left; `bingham_filter_update()` has `x (+) v`). The
+ * likelihood `f_v(y ∘ x^-1)` is the Bingham density of `x` with the principal directions
+ * `conj(m_i) ∘ y` (the columns `m_i` of `m_v`) and the concentrations `z_v`, equal to
+ * `bingham_multiply()` of the state with that density.
+ *
+ * - `y`: d entries, unit length (within `BINGHAM_UNIT_TOL`, then normalized); its sign does not
+ *   matter.
+ * - `m_v`, `z_v`: the observation noise, as in `bingham_filter_update()` (cached the same way).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `y`, `m_v`, `z_v`), `BINGHAM_ERR_INVALID_ARGUMENT`
+ * (NaN/Inf, `y` not unit, `m_v` not orthogonal), `BINGHAM_ERR_NUMERICAL` (concentrations
+ * overflowing a double). On error the filter is unchanged.
+ *
+ * # Safety
+ * `f`: a live handle; `y`: d, `m_v`: d*d and `z_v`: d readable doubles.
+ */
+enum bingham_status bingham_filter_update_world(struct bingham_filter *f,
+                                                const double *y,
+                                                const double *m_v,
+                                                const double *z_v);
+
+/**
+ * The natural logarithm of the predictive density of `y = v ∘ x` under the current state,
+ * `log ∫ f_state(x) f_v(y ∘ x^-1) dx`, without changing the filter: a density on the unit
+ * sphere with respect to the surface measure, as in `bingham_filter_log_likelihood()` (exact).
+ * What a bank of filters compares, and what picks between the interpretations of an ambiguous
+ * observation.
+ *
+ * - `y`, `m_v`, `z_v`: as in `bingham_filter_update_world()`; `log_l`: receives the value.
+ *
+ * Errors: as `bingham_filter_update_world()`, plus `BINGHAM_ERR_NULL_ARGUMENT` (`log_l`). On
+ * error `*log_l` is not written.
+ *
+ * # Safety
+ * `f`: a live handle; `y`: d, `m_v`: d*d and `z_v`: d readable doubles; `log_l`: one writable
+ * double.
+ */
+enum bingham_status bingham_filter_log_likelihood_world(const struct bingham_filter *f,
+                                                        const double *y,
+                                                        const double *m_v,
+                                                        const double *z_v,
+                                                        double *log_l);
+
+/**
  * Nonlinear prediction step: the state becomes the distribution of `a(x) (+) w`,
  * `w ~ Bingham(m_w, z_w)`, for a transition function `a` given as a C callback.
  *
@@ -1723,6 +1826,176 @@ enum bingham_status bingham_ahrs_gyro_bias_covariance(const struct bingham_ahrs 
  */
 enum bingham_status bingham_ahrs_mag_latency_estimate(const struct bingham_ahrs *a,
                                                       double *latency);
+
+/**
+ * Creates a spin filter with the orientation prior `Bingham(m_x, z_x)` and the spin prior
+ * `Bingham(m_v, z_v)`.
+ *
+ * - `m_x`, `m_v`: 4 x 4 row-major orthogonal (within `BINGHAM_ORTHOGONALITY_TOL`;
+ *   re-orthonormalized); `z_x`, `z_v`: 4 concentrations each, `z[i]` for column i, any order
+ *   and shift. `z_x` all equal (e.g. 0) is the uniform orientation prior (nothing known).
+ *   A spin prior centred on "no spin" has the mode `(1, 0, 0, 0)`.
+ * - `out`: receives the new handle (free it with `bingham_spin_filter_free()`).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT`, `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, a matrix not
+ * orthogonal). On error `*out` is not written.
+ *
+ * # Safety
+ * `m_x`, `m_v`: 16 and `z_x`, `z_v`: 4 readable doubles; `out`: a writable
+ * `bingham_spin_filter *`.
+ */
+enum bingham_status bingham_spin_filter_new(const double *m_x,
+                                            const double *z_x,
+                                            const double *m_v,
+                                            const double *z_v,
+                                            struct bingham_spin_filter **out);
+
+/**
+ * Releases a spin filter created by `bingham_spin_filter_new()` or
+ * `bingham_spin_filter_clone()`. `NULL` is a no-op. The handle must not be used afterwards.
+ *
+ * # Safety
+ * `f` must be `NULL` or a live handle from this library, not freed before and not in use by
+ * another thread.
+ */
+void bingham_spin_filter_free(struct bingham_spin_filter *f);
+
+/**
+ * Creates an independent copy of a spin filter (state and cached noises), e.g. for a bank of
+ * hypotheses or to try a step.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `out`). On error `*out` is not written.
+ *
+ * # Safety
+ * `f`: a live handle; `out`: a writable `bingham_spin_filter *`.
+ */
+enum bingham_status bingham_spin_filter_clone(const struct bingham_spin_filter *f,
+                                              struct bingham_spin_filter **out);
+
+/**
+ * One time step: `v ← w ∘ u ∘ v`, `x ← v ∘ x` (the previous spin), then, if `y` is not `NULL`,
+ * the observation `y = o ∘ x`, `o ~ Bingham(m_o, z_o)`.
+ *
+ * - `u`: the control (a known change of spin), 4 doubles, unit within `BINGHAM_UNIT_TOL`
+ *   (then normalized), or `NULL` for none.
+ * - `m_w`, `z_w`: the process noise on the spin (4 x 4 row-major orthogonal, 4
+ *   concentrations; mode `(1, 0, 0, 0)` for zero-mean noise). Cached.
+ * - `y`: the observed orientation, 4 doubles, unit within `BINGHAM_UNIT_TOL` (its sign does not
+ *   matter), or `NULL` when nothing is observed this step (prediction only; then `m_o` and
+ *   `z_o` are ignored and may be `NULL`).
+ * - `m_o`, `z_o`: the observation noise (as `m_w`, `z_w`). Cached.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`f`, `m_w`, `z_w`; `m_o`, `z_o` when `y` is given),
+ * `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, `u` or `y` not unit, a matrix not orthogonal),
+ * `BINGHAM_ERR_NOT_CONVERGED` / `BINGHAM_ERR_NUMERICAL` (moment matching, overflow). On error
+ * the filter is unchanged.
+ *
+ * # Safety
+ * `f`: a live handle; `u`, `y`: `NULL` or 4 readable doubles; `m_w`, `m_o`: 16 and `z_w`,
+ * `z_o`: 4 readable doubles (`m_o`, `z_o` only read when `y` is not `NULL`).
+ */
+enum bingham_status bingham_spin_filter_step(struct bingham_spin_filter *f,
+                                             const double *u,
+                                             const double *m_w,
+                                             const double *z_w,
+                                             const double *y,
+                                             const double *m_o,
+                                             const double *z_o);
+
+/**
+ * The natural logarithm of the predictive density of the observation `y = o ∘ x`,
+ * `o ~ Bingham(m_o, z_o)`, for the step about to be taken: `log ∫ f(y | x) (B_v ∘ B_x)(x) dx`,
+ * a density on the unit sphere S^3 with respect to the surface measure (antipodally
+ * symmetric). The filter is not changed. A bank of spin filters sums it over time to compare
+ * its hypotheses; between two interpretations of an ambiguous observation, the one with the
+ * larger value is the more probable.
+ *
+ * - `y`, `m_o`, `z_o`: as in `bingham_spin_filter_step()` (`y` required here);
+ *   `log_l`: receives the value.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT`, `BINGHAM_ERR_INVALID_ARGUMENT` (NaN/Inf, `y` not unit,
+ * `m_o` not orthogonal), `BINGHAM_ERR_NOT_CONVERGED` / `BINGHAM_ERR_NUMERICAL`. On error
+ * `*log_l` is not written.
+ *
+ * # Safety
+ * `f`: a live handle; `y`: 4, `m_o`: 16 and `z_o`: 4 readable doubles; `log_l`: one writable
+ * double.
+ */
+enum bingham_status bingham_spin_filter_log_likelihood(const struct bingham_spin_filter *f,
+                                                       const double *y,
+                                                       const double *m_o,
+                                                       const double *z_o,
+                                                       double *log_l);
+
+/**
+ * Replaces both marginals (validated as in `bingham_spin_filter_new()`); the cached noises
+ * stay.
+ *
+ * Errors: as `bingham_spin_filter_new()`. On error the filter is unchanged.
+ *
+ * # Safety
+ * `f`: a live handle; `m_x`, `m_v`: 16 and `z_x`, `z_v`: 4 readable doubles.
+ */
+enum bingham_status bingham_spin_filter_set_state(struct bingham_spin_filter *f,
+                                                  const double *m_x,
+                                                  const double *z_x,
+                                                  const double *m_v,
+                                                  const double *z_v);
+
+/**
+ * Copies both marginals: `m_x` (16, row-major, orthonormal columns, the last the orientation's
+ * mode), `z_x` (4, ascending, last 0), `m_v`, `z_v` the same for the spin.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT`; then nothing is written.
+ *
+ * # Safety
+ * `f`: a live handle; `m_x`, `m_v`: 16 and `z_x`, `z_v`: 4 writable doubles.
+ */
+enum bingham_status bingham_spin_filter_get_state(const struct bingham_spin_filter *f,
+                                                  double *m_x,
+                                                  double *z_x,
+                                                  double *m_v,
+                                                  double *z_v);
+
+/**
+ * The orientation's mode: the estimate, a unit quaternion (scalar first; its negative is the
+ * same rotation), written to `q` (4 doubles).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT`; then nothing is written.
+ *
+ * # Safety
+ * `f`: a live handle; `q`: 4 writable doubles.
+ */
+enum bingham_status bingham_spin_filter_orientation_mode(const struct bingham_spin_filter *f,
+                                                         double *q);
+
+/**
+ * The spin's mode: the most probable rotation per time step, a unit quaternion (scalar
+ * first), written to `q` (4 doubles). Its rotation angle divided by the step's duration is the
+ * angular rate.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT`; then nothing is written.
+ *
+ * # Safety
+ * `f`: a live handle; `q`: 4 writable doubles.
+ */
+enum bingham_status bingham_spin_filter_spin_mode(const struct bingham_spin_filter *f, double *q);
+
+/**
+ * The angular spreads (radians) of the orientation (`x_spread`) and of the spin (`v_spread`,
+ * radians per step), 4 doubles each, as `bingham_filter_angular_spread()`: entries 0–2 along
+ * the principal directions (columns 0–2 of the marginal's M), entry 3 the total (the RMS of
+ * `2 sin(θ/2)`, θ the rotation angle from the mode).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT`, `BINGHAM_ERR_NUMERICAL` (an extremely concentrated
+ * marginal). On error nothing is written.
+ *
+ * # Safety
+ * `f`: a live handle; `x_spread`, `v_spread`: 4 writable doubles each.
+ */
+enum bingham_status bingham_spin_filter_angular_spread(const struct bingham_spin_filter *f,
+                                                       double *x_spread,
+                                                       double *v_spread);
 
 #ifdef __cplusplus
 }  // extern "C"

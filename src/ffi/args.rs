@@ -595,8 +595,28 @@ impl Fill for (Output, Output) {
     }
 }
 
-/// The most doubles a getter returns: a 4×4 M and 4 concentrations.
-const GET_MAX: usize = 20;
+impl Fill for (Output, Output, Output, Output) {
+    fn total(&self) -> usize {
+        self.0.len() + self.1.len() + self.2.len() + self.3.len()
+    }
+
+    unsafe fn fill(self, values: &[f64]) {
+        let (a, rest) = values.split_at(self.0.len());
+        let (b, rest) = rest.split_at(self.1.len());
+        let (c, d) = rest.split_at(self.2.len());
+        // SAFETY: forwarded contract.
+        unsafe {
+            self.0.write(a);
+            self.1.write(b);
+            self.2.write(c);
+            self.3.write(d);
+        }
+    }
+}
+
+/// The most doubles a getter returns: two 4×4 M and their 4 concentrations (the spin filter's
+/// state).
+const GET_MAX: usize = 40;
 
 /// Shared body of the getters of the handles: checks the output pointers `outs`, lets `get`
 /// compute their values into a library buffer (the outputs' values one after another, in the

@@ -16,7 +16,10 @@
 //! - [`deterministic`]: deterministic samples of a distribution (`bingham_deterministic_samples`).
 //! - [`filter`]: the recursive filter handle `bingham_filter` (including the nonlinear predict
 //!   and update through C callbacks).
+//! - [`world`]: the filter's world-frame steps (`bingham_filter_predict_world`, …; Glover &
+//!   Kaelbling's first-order model).
 //! - [`ahrs`]: the IMU orientation filter handle `bingham_ahrs`.
+//! - [`spin`]: the second-order (orientation and spin) filter handle `bingham_spin_filter`.
 //!
 //! Conventions (see the header's preamble): row-major `double` arrays, `z` in any order and
 //! shift on input, sorted ascending with `z[d-1] = 0` on output, quaternions scalar first, F
@@ -53,9 +56,13 @@ pub mod deterministic;
 
 pub mod filter;
 
+pub mod world;
+
 pub mod nonlinear;
 
 pub mod ahrs;
+
+pub mod spin;
 
 pub use ahrs::*;
 pub use deterministic::*;
@@ -66,5 +73,7 @@ pub use mle::*;
 pub use nonlinear::*;
 pub use normalization::*;
 pub use observation::*;
+pub use spin::*;
 pub use status::{bingham_status, bingham_status_str};
 pub use version::*;
+pub use world::*;

@@ -26,10 +26,11 @@ use super::noise::{NoiseCache, Role};
 use super::world::{conjugation, world_likelihood_m};
 use super::{Mat, Vect};
 use crate::canonical::{params_row_major, unit};
-use crate::distribution::{bayes_product, Bingham};
+use crate::distribution::{bayes_product, omega, Bingham};
 use crate::error::{Error, Result};
 use crate::linalg::{congruence, write_row_major};
 use crate::mle::{fit_second_moment, Derivs};
+use crate::observation::spread_from_omega;
 use crate::quaternion::{compose_moments, left, right};
 
 /// One Bingham marginal: `M` (orthonormal columns, the last the mode) and `z` (ascending,
@@ -160,6 +161,27 @@ impl SpinFilter {
     /// The spin's mode: the most probable rotation per step, a unit quaternion (scalar first).
     pub fn spin_mode(&self) -> [f64; 4] {
         self.v.mode()
+    }
+
+    /// The angular spreads (radians) of the orientation (`x_out`) and of the spin (`v_out`,
+    /// radians per step), each as [`super::BinghamFilter::angular_spread_into`]: entries 0–2
+    /// along the principal directions (columns 0–2 of the marginal's `M`), entry 3 the total
+    /// (the RMS of `2 sin(θ/2)`, θ the rotation angle from the mode). A uniform marginal gives
+    /// the spread of uniform rotations. Errors: lengths not 4 (nothing written),
+    /// [`Error::Numerical`] (moments of an extremely concentrated marginal).
+    pub fn angular_spread_into(&self, x_out: &mut [f64], v_out: &mut [f64]) -> Result<()> {
+        if x_out.len() != 4 || v_out.len() != 4 {
+            return Err(Error::InvalidDimension(format!(
+                "spread buffers must have length 4, got {} and {}",
+                x_out.len(),
+                v_out.len()
+            )));
+        }
+        let wx = omega(&self.x.z)?;
+        let wv = omega(&self.v.z)?;
+        spread_from_omega(wx.as_slice(), x_out);
+        spread_from_omega(wv.as_slice(), v_out);
+        Ok(())
     }
 
     /// One time step: `v ← w ∘ u ∘ v`, `x ← v ∘ x` with the process noise `w ~ Bingham(m_w,
