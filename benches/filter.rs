@@ -142,7 +142,63 @@ fn bench_predict(c: &mut Criterion, name: &str, sc: &Scenario) {
     g.finish();
 }
 
+/// Glover & Kaelbling's filters on the same simulated observations of an object spinning at
+/// 60° per step (observation noise Λo = (−40, −40, −10), process noise (−400)³): the first-order
+/// world-frame step (`predict_world` with the spin as the control + `update_world`) and one step
+/// of the second-order spin filter (issue 22 target: ≤ 3× the first-order step).
+fn bench_spin(c: &mut Criterion) {
+    use bingham::filter::SpinFilter;
+    use bingham::quaternion::q4;
+    let id = [
+        1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+    ];
+    let (z_w, z_o) = ([0.0, -400.0, -400.0, -400.0], [0.0, -40.0, -40.0, -10.0]);
+    let spin = q4::from_rotation_vector(&[0.6, -0.5, 0.62]);
+    let noise = Bingham::from_row_major(4, &id, &z_o).unwrap();
+    let draws = noise.sample(&mut StdRng::seed_from_u64(5), 400);
+    let mut x = [0.5, 0.5, 0.5, 0.5];
+    let ys: Vec<[f64; 4]> = draws
+        .iter()
+        .map(|o| {
+            x = q4::mul(&spin, &x);
+            q4::mul(&[o[0], o[1], o[2], o[3]], &x)
+        })
+        .collect();
+    let mut g = c.benchmark_group("spin_step");
+    let mut first = BinghamFilter::new(4, &id, &[0.0, -5.0, -5.0, -5.0]).unwrap();
+    let mut k = 0usize;
+    g.bench_function("first-order predict_world+update_world", |b| {
+        b.iter(|| {
+            let y = &ys[k % ys.len()];
+            k += 1;
+            first
+                .predict_world(Some(black_box(&spin)), &id, &z_w)
+                .unwrap();
+            first.update_world(black_box(y), &id, &z_o).unwrap();
+        })
+    });
+    let mut second = SpinFilter::new(&id, &[0.0; 4], &id, &[0.0, -3.0, -3.0, -3.0]).unwrap();
+    for y in &ys[..50] {
+        second.step(None, &id, &z_w, Some(y), &id, &z_o).unwrap();
+    }
+    let mut k = 50usize;
+    g.bench_function("spin filter step", |b| {
+        b.iter(|| {
+            let y = &ys[k % ys.len()];
+            k += 1;
+            second
+                .step(None, &id, &z_w, Some(black_box(y)), &id, &z_o)
+                .unwrap();
+        })
+    });
+    g.bench_function("spin filter log_likelihood", |b| {
+        b.iter(|| second.log_likelihood(black_box(&ys[7]), &id, &z_o).unwrap())
+    });
+    g.finish();
+}
+
 fn bench(c: &mut Criterion) {
+    bench_spin(c);
     bench_step(c, "d2", &scenario_2d());
     bench_step(c, "d4", &scenario_4d());
     bench_predict(c, "d2", &scenario_2d());

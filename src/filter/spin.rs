@@ -77,6 +77,10 @@ struct Warm {
 pub struct SpinFilter {
     x: Marginal,
     v: Marginal,
+    /// The second moment of `v` when it is known without evaluating `ω(z_v)`: after a step,
+    /// the composition's moment that `v` was fitted to (moment matching reproduces it), which
+    /// saves one evaluation of the normalization's derivatives per step.
+    v_moment: Option<Mat<4>>,
     warm: Warm,
     process: NoiseCache<4>,
     observation: NoiseCache<4>,
@@ -100,6 +104,7 @@ impl SpinFilter {
         Ok(SpinFilter {
             x: Marginal::from_slices("m_x", m_x, "z_x", z_x)?,
             v: Marginal::from_slices("m_v", m_v, "z_v", z_v)?,
+            v_moment: None,
             warm: Warm::default(),
             process: NoiseCache::empty(),
             observation: NoiseCache::empty(),
@@ -112,6 +117,7 @@ impl SpinFilter {
         let v = Marginal::from_slices("m_v", m_v, "z_v", z_v)?;
         self.x = x;
         self.v = v;
+        self.v_moment = None;
         self.warm = Warm::default();
         Ok(())
     }
@@ -213,7 +219,7 @@ impl SpinFilter {
         };
 
         let ax = composed_moment(&self.x.m, &self.x.z)?;
-        let av = composed_moment(&self.v.m, &self.v.z)?;
+        let av = self.spin_moment()?;
 
         // Orientation: x_n = v_{n−1} ∘ x_{n−1}, then the observation.
         let (mxp, zxp, warm_x) =
@@ -260,6 +266,14 @@ impl SpinFilter {
         Ok(())
     }
 
+    /// The spin marginal's second moment (see [`SpinFilter::v_moment`]).
+    fn spin_moment(&self) -> Result<Mat<4>> {
+        match self.v_moment {
+            Some(a) => Ok(a),
+            None => composed_moment(&self.v.m, &self.v.z),
+        }
+    }
+
     /// The natural logarithm of the predictive density of the observation `y = o ∘ x_n`,
     /// `o ~ Bingham(m_o, z_o)`, before the step that would take it: `log ∫ f(y | x) (B_v ∘
     /// B_x)(x) dx`, a density on the unit sphere S³ (surface measure, antipodally symmetric),
@@ -279,7 +293,7 @@ impl SpinFilter {
         };
         let log_f_o = o.log_f()?;
         let ax = composed_moment(&self.x.m, &self.x.z)?;
-        let av = composed_moment(&self.v.m, &self.v.z)?;
+        let av = self.spin_moment()?;
         let (mxp, zxp, _) =
             fit_second_moment(&compose_moments(&av, &ax), self.warm.orientation.as_ref())?;
         let p = congruence(&world_likelihood_m(&y, &o.m), &o.z);
