@@ -55,12 +55,12 @@
 //! `100 (1 − e_QBF/e_EKF)` with its standard error — the paper's "average % mean error decrease"
 //! (Table 1: 37.3, 45.6, 54.3, 19.9, 3.33, 1.52, 3.42, 0.72, 0.47; QBF better on 268/270 runs).
 //! What each test asserts, and why, is in its doc comment. Printed with `--nocapture`; the report
-//! is in `docs/accuracy.md`. The ignored test `table1_ekf_variants` runs weaker EKFs (noise not
+//! is in `docs/accuracy.md`. The test `table1_ekf_variants` (with `BINGHAM_TABLE1_VARIANTS=1`) runs weaker EKFs (noise not
 //! rotated into the state's frame, anisotropy averaged away) to show where the paper's larger
 //! margins can come from.
 //!
 //! Run: `cargo test --release --test glover_table1 -- --nocapture`
-//! (variants: `-- --ignored --nocapture`).
+//! (variants: `BINGHAM_TABLE1_VARIANTS=1 cargo test --release --test glover_table1 -- --nocapture`).
 
 use bingham::filter::BinghamFilter;
 use bingham::quaternion::{left_matrix, q4, right_matrix};
@@ -747,11 +747,15 @@ fn table1_tangent_qbf_beats_the_ekf() {
     assert!(total >= 180, "QBF better on only {total}/270 runs");
 }
 
-/// Weaker EKFs (not in CI): the noise not rotated into the state's frame, the anisotropy
-/// averaged away — how much of the paper's margin they explain.
+/// Weaker EKFs: the noise not rotated into the state's frame, the anisotropy averaged away —
+/// how much of the paper's margin they explain. Runs only with `BINGHAM_TABLE1_VARIANTS=1` (four
+/// EKFs on both noise models, too long for every CI run); it asserts that every weaker variant
+/// leaves the QBF a larger mean margin than the best-chance EKF of the CI tests.
 #[test]
-#[ignore]
 fn table1_ekf_variants() {
+    if std::env::var_os("BINGHAM_TABLE1_VARIANTS").is_none() {
+        return;
+    }
     let variants = [
         EkfNoise::Rotated,
         EkfNoise::RotatedIsotropic,
@@ -760,8 +764,18 @@ fn table1_ekf_variants() {
     ];
     for kind in [Kind::Central, Kind::Tangent] {
         let settings = table(kind, &variants);
+        let mut means = vec![];
         for (k, v) in variants.iter().enumerate() {
-            print_table(&format!("{kind:?} noise, EKF variant {v:?}"), &settings, k);
+            let rows = print_table(&format!("{kind:?} noise, EKF variant {v:?}"), &settings, k);
+            means.push(rows.iter().map(|r| r.decrease.0).sum::<f64>() / rows.len() as f64);
+        }
+        for (k, m) in means.iter().enumerate().skip(1) {
+            assert!(
+                *m > means[0],
+                "{kind:?}: variant {:?} leaves a mean margin {m:.2} % ≤ the best EKF's {:.2} %",
+                variants[k],
+                means[0]
+            );
         }
     }
 }
