@@ -84,6 +84,8 @@ demo: deps build venv
 	@$(VENV_PYTHON) examples/python/track_quaternion.py 20
 	@echo; echo "==== examples/python/nonlinear.py (nonlinear rate law + pinhole camera)"
 	@$(VENV_PYTHON) examples/python/nonlinear.py
+	@echo; echo "==== examples/python/spin_bank.py (spin filter vs a bank of 12, as examples/c/spin_bank.c)"
+	@$(VENV_PYTHON) examples/python/spin_bank.py
 
 # Orientation accuracy on real IMU data (BROAD, CC BY 4.0): our AHRS against VQF, Madgwick and
 # Mahony (the peers need the Python packages vqf and ahrs: `make deps`); plot of trial 07. Then

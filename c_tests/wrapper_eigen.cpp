@@ -22,7 +22,16 @@
 //   and exp(x^T M Z M^T x) / F computed with Eigen;
 // - vector_observation with Eigen 3-vectors: the exponent q^T M Z M^T q equals
 //   kappa (r^T R(q) b - 1) for random q, R(q) = Eigen::Quaterniond(q).toRotationMatrix();
-// - mle of an Eigen matrix in either storage order equals mle of the row-major vector.
+// - mle of an Eigen matrix in either storage order equals mle of the row-major vector;
+// - the world-frame steps with Eigen quaternions: bit for bit the C calls with (w, x, y, z) (and
+//   not with coeffs()); the prediction's second moment equals sum_ab B_ab L_a S L_b^T computed
+//   with Eigen (S the second moment of u x, B the noise's, L_a the left-multiplication matrices
+//   built from Eigen's quaternion product), the update equals bingham::multiply with the
+//   likelihood's directions conj(m_i) y computed with Eigen;
+// - SpinFilter with Eigen quaternions in and out: bit for bit the C calls; its predictive
+//   density equals the first-order filter's world-frame one for the prior compose(spin,
+//   orientation); a noiseless constant spin (x[k+1] = spin * x[k] with Eigen) is found
+//   (spin_mode().angularDistance(spin) < 1e-6 after 300 steps).
 #include <Eigen/Dense>
 
 #include "bingham_eigen.hpp"
@@ -289,12 +298,155 @@ static void test_ahrs() {
     CHECK(a.uncertainty() > 0 && a.uncertainty() < 0.1);
 }
 
+// The 4 x 4 matrix of q * (.) (Hamilton product, scalar first), from Eigen's product.
+static Matrix4d left_matrix(const Quaterniond &q) {
+    Matrix4d l;
+    for (int j = 0; j < 4; ++j) {
+        Vector4d e = Vector4d::Zero();
+        e(j) = 1;
+        const Quaterniond p = q * Quaterniond(e(0), e(1), e(2), e(3));
+        l.col(j) = Vector4d(p.w(), p.x(), p.y(), p.z());
+    }
+    return l;
+}
+static Quaterniond quat(const Vector4d &wxyz) { return Quaterniond(wxyz(0), wxyz(1), wxyz(2), wxyz(3)); }
+static Matrix4d precision(const bingham::Distribution &b) {
+    return b.matrix() * b.concentrations().asDiagonal() * b.matrix().transpose();
+}
+
+static void test_world_steps() {
+    const bingham::Distribution init(random_orthogonal(), Vector4d(-60, -25, -8, 0));
+    const bingham::Distribution w(random_orthogonal(), Vector4d(-400, -200, -50, 0));
+    const bingham::Distribution v(random_orthogonal(), Vector4d(-40, -40, -10, 0));
+    bingham::Filter f(init), wrong(init);
+    bingham_filter *c = nullptr;
+    CHECK_OK(bingham_filter_new(4, init.M.data(), init.z.data(), &c));
+    for (int k = 0; k < 10; ++k) {
+        const Quaterniond u = random_quaternion(), y = random_quaternion();
+        const double uc[4] = {u.w(), u.x(), u.y(), u.z()}, yc[4] = {y.w(), y.x(), y.y(), y.z()};
+        f.predict_world(u, w);
+        CHECK_OK(bingham_filter_predict_world(c, uc, w.M.data(), w.z.data()));
+        CHECK_OK(bingham_filter_predict_world(wrong.get(), u.coeffs().data(), w.M.data(), w.z.data()));
+        double ll;
+        CHECK_OK(bingham_filter_log_likelihood_world(c, yc, v.M.data(), v.z.data(), &ll));
+        CHECK(f.log_likelihood_world(y, v) == ll);
+        f.update_world(y, v);
+        CHECK_OK(bingham_filter_update_world(c, yc, v.M.data(), v.z.data()));
+        CHECK_OK(bingham_filter_update_world(wrong.get(), y.coeffs().data(), v.M.data(), v.z.data()));
+    }
+    double m[16], z[4];
+    CHECK_OK(bingham_filter_get_state(c, m, z));
+    const bingham::Distribution s = f.state();
+    CHECK(std::memcmp(s.M.data(), m, sizeof m) == 0 && std::memcmp(s.z.data(), z, sizeof z) == 0);
+    CHECK(!same(s, wrong.state()));
+
+    // prediction: the second moment of w * u * x, written with Eigen
+    const Quaterniond u = random_quaternion();
+    const Matrix4d lu = left_matrix(u);
+    const Matrix4d s_ux = lu * bingham::second_moment_matrix(s) * lu.transpose();
+    const Matrix4d b = bingham::second_moment_matrix(w);
+    Matrix4d s_ref = Matrix4d::Zero();
+    for (int a = 0; a < 4; ++a)
+        for (int bb = 0; bb < 4; ++bb) {
+            Vector4d ea = Vector4d::Zero(), eb = Vector4d::Zero();
+            ea(a) = 1;
+            eb(bb) = 1;
+            s_ref += b(a, bb) * left_matrix(quat(ea)) * s_ux * left_matrix(quat(eb)).transpose();
+        }
+    bingham::Filter g = f.clone();
+    g.predict_world(u, w);
+    const double d_moment = (Matrix4d(bingham::second_moment_matrix(g.state())) - s_ref).cwiseAbs().maxCoeff();
+    if (d_moment >= 1e-10) std::fprintf(stderr, "    predict_world second moment off by %.3g\n", d_moment);
+    CHECK(d_moment < 1e-10);
+    // without a control: the identity
+    bingham::Filter g0 = f.clone(), g1 = f.clone();
+    g0.predict_world(w);
+    g1.predict_world(Quaterniond::Identity(), w);
+    CHECK(same(g0.state(), g1.state()));
+
+    // update: the product with the likelihood whose directions are conj(m_i) * y (Eigen)
+    const Quaterniond y = random_quaternion();
+    Matrix4d ml;
+    const Matrix4d mv = v.matrix();
+    for (int j = 0; j < 4; ++j) {
+        const Quaterniond p = quat(mv.col(j)).conjugate() * y;
+        ml.col(j) = Vector4d(p.w(), p.x(), p.y(), p.z());
+    }
+    const bingham::Distribution lik(ml, v.concentrations());
+    const bingham::Distribution want = bingham::multiply(s, lik);
+    bingham::Filter h = f.clone();
+    h.update_world(y, v);
+    const double d_update = (precision(h.state()) - precision(want)).cwiseAbs().maxCoeff() / 500.0;
+    CHECK(d_update < 1e-12);
+    bingham_filter_free(c);
+}
+
+static void test_spin_filter() {
+    static_assert(std::is_same<decltype(std::declval<const bingham::SpinFilter &>().spin_mode()), Quaterniond>::value &&
+                      std::is_same<decltype(std::declval<const bingham::SpinFilter &>().orientation_mode()),
+                                   Quaterniond>::value,
+                  "SpinFilter's estimates are Eigen::Quaterniond");
+    const bingham::Distribution bx(random_orthogonal(), Vector4d(-60, -25, -8, 0));
+    const bingham::Distribution bv(random_orthogonal(), Vector4d(-40, -30, -5, 0));
+    const bingham::Distribution w(random_orthogonal(), Vector4d(-400, -300, -100, 0));
+    const bingham::Distribution o(random_orthogonal(), Vector4d(-40, -40, -10, 0));
+    bingham::SpinFilter f(bx, bv), wrong(bx, bv);
+    // the predictive density is the world-frame one of the composed prior
+    bingham::Filter first(bingham::compose(bv, bx));
+    for (int k = 0; k < 5; ++k) {
+        const Quaterniond y = random_quaternion();
+        const double a = f.log_likelihood(y, o), b = first.log_likelihood_world(y, o);
+        CHECK(std::abs(a - b) < 1e-9 * (1 + std::abs(b)));
+    }
+    bingham_spin_filter *c = nullptr;
+    CHECK_OK(bingham_spin_filter_new(bx.M.data(), bx.z.data(), bv.M.data(), bv.z.data(), &c));
+    for (int k = 0; k < 10; ++k) {
+        const Quaterniond u = random_quaternion(), y = random_quaternion();
+        const double uc[4] = {u.w(), u.x(), u.y(), u.z()}, yc[4] = {y.w(), y.x(), y.y(), y.z()};
+        f.step(u, w, y, o);
+        CHECK_OK(bingham_spin_filter_step(c, uc, w.M.data(), w.z.data(), yc, o.M.data(), o.z.data()));
+        CHECK_OK(bingham_spin_filter_step(wrong.get(), u.coeffs().data(), w.M.data(), w.z.data(), y.coeffs().data(),
+                                          o.M.data(), o.z.data()));
+    }
+    double mx[16], zx[4], mv[16], zv[4], qx[4], qv[4];
+    CHECK_OK(bingham_spin_filter_get_state(c, mx, zx, mv, zv));
+    CHECK_OK(bingham_spin_filter_orientation_mode(c, qx));
+    CHECK_OK(bingham_spin_filter_spin_mode(c, qv));
+    const bingham::Distribution sx = f.orientation(), sv = f.spin();
+    CHECK(std::memcmp(sx.M.data(), mx, sizeof mx) == 0 && std::memcmp(sv.z.data(), zv, sizeof zv) == 0);
+    CHECK(!same(sv, wrong.spin()));
+    const Quaterniond ex = f.orientation_mode(), ev = f.spin_mode();
+    CHECK(ex.w() == qx[0] && ex.x() == qx[1] && ex.y() == qx[2] && ex.z() == qx[3]);
+    CHECK(ev.w() == qv[0] && ev.x() == qv[1] && ev.y() == qv[2] && ev.z() == qv[3]);
+    bingham_spin_filter_free(c);
+
+    // a noiseless constant spin, uniform orientation prior, broad spin prior at the identity
+    const Matrix4d eye = Matrix4d::Identity();
+    bingham::SpinFilter s(bingham::Distribution(eye, Vector4d::Zero()), bingham::Distribution(eye, Vector4d(0, -3, -3, -3)));
+    const bingham::Distribution sharp(eye, Vector4d(0, -400, -400, -400));
+    const Quaterniond spin(Eigen::AngleAxisd(1.2, Vector3d(0.3, -1.0, 0.4).normalized()));  // ~69 deg per step
+    Quaterniond x = random_quaternion();
+    for (int k = 0; k < 300; ++k) {
+        s.step(sharp, x, sharp);
+        if (k < 299) x = spin * x;
+    }
+    const double err = s.spin_mode().angularDistance(spin), x_err = s.orientation_mode().angularDistance(x);
+    if (err >= 1e-6 || x_err >= 1e-6) std::fprintf(stderr, "    spin error %.3g rad, orientation %.3g rad\n", err, x_err);
+    CHECK(err < 1e-6 && x_err < 1e-6);
+    const bingham::SpinSpread spread = s.angular_spread();
+    // the spin is composed with the process noise last: its spread lies between the noise's and twice that
+    const double noise_spread = bingham::angular_spread(sharp)[3];
+    CHECK(spread.spin[3] > noise_spread && spread.spin[3] < 2 * noise_spread);
+}
+
 int main() {
     try {
         test_quaternions();
         test_storage_order();
         test_vectors();
         test_ahrs();
+        test_world_steps();
+        test_spin_filter();
     } catch (const std::exception &e) {
         std::fprintf(stderr, "unexpected exception: %s\n", e.what());
         return 1;

@@ -7,10 +7,15 @@
 //   bingham_last_error_message() reports for the same C call; sizes the C API cannot check
 //   (Distribution, vectors) throw BINGHAM_ERR_INVALID_DIMENSION before the library is called;
 //   a failing call leaves its target (a Filter, an Ahrs, the variable assigned to) unchanged;
-// - Filter and Ahrs: the same steps as a C handle give bit-identical states; a moved-from handle
+// - Filter (also its world-frame steps), SpinFilter and Ahrs: the same steps as a C handle give
+//   bit-identical states; a moved-from handle
 //   is empty (operator bool false, methods throw BINGHAM_ERR_NULL_ARGUMENT), safe to destroy and
 //   to assign to; move assignment releases the old handle (LeakSanitizer, `make sanitize`,
-//   would report a leak, ASan a double free); clone() is independent of its original.
+//   would report a leak, ASan a double free); clone() is independent of its original;
+// - the world-frame update equals bingham::multiply() with the likelihood written out here
+//   (directions conj(m_i) y), the world-frame prediction with a control equals
+//   compose(noise, rotate_left(state, u)); SpinFilter on a noiseless constant spin converges to
+//   it (spin mode within 1e-6 rad after 300 steps).
 //
 // Built as C++17 and as C++20 with -Wall -Wextra -Werror -pedantic (tests/c_tests.rs) and under
 // ASan + UBSan + LSan (scripts/sanitize.sh).
@@ -31,6 +36,12 @@ static_assert(!std::is_copy_constructible_v<bingham::Filter> && std::is_nothrow_
               "Filter is move-only");
 static_assert(!std::is_copy_constructible_v<bingham::Ahrs> && std::is_nothrow_move_constructible_v<bingham::Ahrs>,
               "Ahrs is move-only");
+static_assert(!std::is_copy_constructible_v<bingham::SpinFilter> && !std::is_copy_assignable_v<bingham::SpinFilter> &&
+                  std::is_nothrow_move_constructible_v<bingham::SpinFilter> &&
+                  std::is_nothrow_move_assignable_v<bingham::SpinFilter>,
+              "SpinFilter is move-only");
+static_assert(std::is_same_v<decltype(std::declval<const bingham::SpinFilter &>().spin_mode()), bingham::Quaternion>,
+              "without Eigen, the estimates are bingham::Quaternion");
 
 static bool same(const std::vector<double> &a, const std::vector<double> &b) {
     return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
@@ -424,6 +435,270 @@ static void test_filter_nonlinear() {
     bingham_filter_free(c);
 }
 
+// Hamilton product q r, scalar first ("rotate by r, then by q").
+static bingham::Quaternion qmul(const bingham::Quaternion &q, const bingham::Quaternion &r) {
+    return {q.w * r.w - q.x * r.x - q.y * r.y - q.z * r.z, q.w * r.x + q.x * r.w + q.y * r.z - q.z * r.y,
+            q.w * r.y - q.x * r.z + q.y * r.w + q.z * r.x, q.w * r.z + q.x * r.y - q.y * r.x + q.z * r.w};
+}
+static bingham::Quaternion qconj(const bingham::Quaternion &q) { return {q.w, -q.x, -q.y, -q.z}; }
+// The rotation by `angle` about the unit `axis`.
+static bingham::Quaternion axis_angle(double ax, double ay, double az, double angle) {
+    const double n = std::sqrt(ax * ax + ay * ay + az * az), s = std::sin(angle / 2) / n;
+    return {std::cos(angle / 2), s * ax, s * ay, s * az};
+}
+// The rotation angle between two orientations (q and -q the same).
+static double angle_between(const bingham::Quaternion &a, const bingham::Quaternion &b) {
+    const double c = std::fabs(a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z);
+    return 2 * std::acos(c > 1 ? 1 : c);
+}
+// max |P_a - P_b| / max(1, max|z|), P = M diag(z) M^T: two Bingham densities' exponents.
+static double precision_difference(const bingham::Distribution &a, const bingham::Distribution &b) {
+    double diff = 0, scale = 1;
+    for (std::size_t i = 0; i < a.d; ++i) {
+        scale = std::fmax(scale, std::fabs(a.z[i]));
+        for (std::size_t j = 0; j < a.d; ++j) {
+            double pa = 0, pb = 0;
+            for (std::size_t k = 0; k < a.d; ++k) {
+                pa += a.m(i, k) * a.z[k] * a.m(j, k);
+                pb += b.m(i, k) * b.z[k] * b.m(j, k);
+            }
+            diff = std::fmax(diff, std::fabs(pa - pb));
+        }
+    }
+    return diff / scale;
+}
+// The likelihood of y = v o x, v ~ noise, as a Bingham density of x: directions conj(m_i) y.
+static bingham::Distribution world_likelihood(const bingham::Quaternion &y, const bingham::Distribution &noise) {
+    bingham::Distribution l = noise;
+    for (std::size_t j = 0; j < 4; ++j) {
+        const bingham::Quaternion c = qmul(qconj({noise.m(0, j), noise.m(1, j), noise.m(2, j), noise.m(3, j)}), y);
+        const double col[4] = {c.w, c.x, c.y, c.z};
+        for (std::size_t i = 0; i < 4; ++i) l.M[i * 4 + j] = col[i];
+    }
+    return l;
+}
+
+// Filter's world-frame steps: bit for bit the C calls; against multiply / compose.
+static void test_filter_world() {
+    using bingham::Distribution;
+    const double c = std::cos(0.3), s = std::sin(0.3);
+    const Distribution init({c, 0, 0, -s, 0, c, -s, 0, 0, s, c, 0, s, 0, 0, c}, {-60, -25, -8, 0});
+    // anisotropic noises (the paper's kind), modes at the identity
+    const Distribution w({0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 0}, {-400, -200, -50, 0});
+    const Distribution v({0, 0, 0, 1, 0, 1, 0, 0, 0, 0, 1, 0, 1, 0, 0, 0}, {-40, -40, -10, 0});
+    bingham::Filter f(init);
+    bingham_filter *h = nullptr;
+    CHECK_OK(bingham_filter_new(4, init.M.data(), init.z.data(), &h));
+    const bingham::Quaternion u = axis_angle(1, -2, 0.5, 0.7), y = axis_angle(0.3, 1, -1, 1.1);
+    const double uc[4] = {u.w, u.x, u.y, u.z}, yc[4] = {y.w, y.x, y.y, y.z};
+    for (int k = 0; k < 4; ++k) {
+        if (k % 2) {
+            f.predict_world(u, w);
+            CHECK_OK(bingham_filter_predict_world(h, uc, w.M.data(), w.z.data()));
+        } else {
+            f.predict_world(w);
+            CHECK_OK(bingham_filter_predict_world(h, nullptr, w.M.data(), w.z.data()));
+        }
+        double ll;
+        CHECK_OK(bingham_filter_log_likelihood_world(h, yc, v.M.data(), v.z.data(), &ll));
+        CHECK(f.log_likelihood_world(y, v) == ll);
+        f.update_world(y, v);
+        CHECK_OK(bingham_filter_update_world(h, yc, v.M.data(), v.z.data()));
+    }
+    Distribution sc(std::vector<double>(16), std::vector<double>(4));
+    CHECK_OK(bingham_filter_get_state(h, sc.M.data(), sc.z.data()));
+    CHECK(same(f.state(), sc));
+    // independent: the update is the exact product with the likelihood written out here, the
+    // prediction the moment-matched composition of the noise with the rotated state
+    const Distribution prior = f.state();
+    bingham::Filter g = f.clone();
+    g.update_world(y, v);
+    const double d_update = precision_difference(g.state(), bingham::multiply(prior, world_likelihood(y, v)));
+    CHECK(d_update < 1e-12);
+    g.predict_world(u, w);
+    const Distribution posterior = bingham::multiply(prior, world_likelihood(y, v));
+    const double d_predict =
+        precision_difference(g.state(), bingham::compose(w, bingham::rotate_left(posterior, u)));
+    if (d_predict >= 1e-9) std::fprintf(stderr, "    predict_world vs compose: %.3g\n", d_predict);
+    CHECK(d_predict < 1e-9);
+    // the world frame is not the body frame for an anisotropic noise
+    bingham::Filter body = f.clone();
+    body.update(y, v);
+    CHECK(precision_difference(body.state(), g.state()) > 1e-3);
+    // errors: the filter is unchanged, the message the C call's
+    const Distribution before = f.state();
+    expect_error([&] { f.update_world(bingham::Quaternion(1, 0.1, 0, 0), v); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [&] {
+                     const double bad[4] = {1, 0.1, 0, 0};
+                     return bingham_filter_update_world(h, bad, v.M.data(), v.z.data());
+                 },
+                 "update_world with a non-unit quaternion");
+    expect_error([&] { f.predict_world(bingham::Quaternion(std::nan(""), 0, 0, 1), w); },
+                 BINGHAM_ERR_INVALID_ARGUMENT,
+                 [&] {
+                     const double bad[4] = {std::nan(""), 0, 0, 1};
+                     return bingham_filter_predict_world(h, bad, w.M.data(), w.z.data());
+                 },
+                 "predict_world with NaN");
+    expect_error([&] { (void)f.log_likelihood_world(std::complex<double>(1, 0), v); },
+                 BINGHAM_ERR_INVALID_DIMENSION, "complex y on a d = 4 filter");
+    expect_error([&] { f.predict_world(bingham::noise_from_angle_std(2, 0.1)); }, BINGHAM_ERR_INVALID_DIMENSION,
+                 "d = 2 noise on a d = 4 filter");
+    CHECK(same(f.state(), before));
+    bingham::Filter taken = std::move(g);
+    expect_error([&] { g.predict_world(w); }, BINGHAM_ERR_NULL_ARGUMENT, "predict_world on a moved-from filter");
+    // d = 2: complex numbers (the world frame is the body frame: multiplication commutes)
+    bingham::Filter axis(Distribution({1, 0, 0, 1}, {-1, 0})), axis_body = axis.clone();
+    const Distribution w2({0, 1, 1, 0}, {-50, 0}), v2({0, 1, 1, 0}, {-5, 0});
+    axis.predict_world(std::polar(1.0, 0.3), w2);
+    axis_body.predict_rotation(std::polar(1.0, 0.3), w2);
+    axis.update_world(std::polar(1.0, 0.35), v2);
+    axis_body.update(std::polar(1.0, 0.35), v2);
+    CHECK(precision_difference(axis.state(), axis_body.state()) < 1e-12);
+    CHECK_CLOSE(axis.log_likelihood_world(std::polar(1.0, 0.2), v2),
+                axis_body.log_likelihood(std::polar(1.0, 0.2), v2), 1e-12);
+    bingham_filter_free(h);
+}
+
+static void get_spin_state(const bingham_spin_filter *h, bingham::Distribution &x, bingham::Distribution &v) {
+    x = bingham::Distribution(std::vector<double>(16), std::vector<double>(4));
+    v = x;
+    CHECK_OK(bingham_spin_filter_get_state(h, x.M.data(), x.z.data(), v.M.data(), v.z.data()));
+}
+
+// SpinFilter: every overload bit for bit the C calls; convergence; errors, clone, move.
+static void test_spin_filter() {
+    using bingham::Distribution;
+    using bingham::Quaternion;
+    const std::vector<double> eye = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    const Distribution uniform(eye, {0, 0, 0, 0});
+    const Distribution spin_prior(eye, {0, -3, -3, -3});  // mode (1, 0, 0, 0): no spin, broad
+    const Distribution w(eye, {0, -400, -300, -200});      // anisotropic process noise on the spin
+    const Distribution o({0, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 0}, {-40, -40, -10, 0});
+    bingham::SpinFilter f(uniform, spin_prior);
+    CHECK(static_cast<bool>(f));
+    bingham_spin_filter *h = nullptr;
+    CHECK_OK(bingham_spin_filter_new(uniform.M.data(), uniform.z.data(), spin_prior.M.data(), spin_prior.z.data(),
+                                     &h));
+    const Quaternion spin = axis_angle(0.2, -0.4, 1.0, 1.0);  // ~57 degrees per step
+    const Quaternion u = axis_angle(1, 0, 0, 0.01);
+    Quaternion x = axis_angle(1, 1, 0, 0.4);
+    bool all_same = true, all_ll = true;
+    for (int k = 0; k < 24; ++k) {
+        const double xc[4] = {x.w, x.x, x.y, x.z}, uc[4] = {u.w, u.x, u.y, u.z};
+        const bool observed = k % 5 != 4, control = k % 3 == 2;
+        if (observed) {
+            double ll;
+            CHECK_OK(bingham_spin_filter_log_likelihood(h, xc, o.M.data(), o.z.data(), &ll));
+            all_ll = all_ll && f.log_likelihood(x, o) == ll;
+        }
+        if (observed && control) f.step(u, w, x, o);
+        if (observed && !control) f.step(w, x, o);
+        if (!observed && control) f.step(u, w);
+        if (!observed && !control) f.step(w);
+        CHECK_OK(bingham_spin_filter_step(h, control ? uc : nullptr, w.M.data(), w.z.data(),
+                                          observed ? xc : nullptr, observed ? o.M.data() : nullptr,
+                                          observed ? o.z.data() : nullptr));
+        Distribution sx, sv;
+        get_spin_state(h, sx, sv);
+        const auto st = f.state();
+        all_same = all_same && same(st.first, sx) && same(st.second, sv) && same(f.orientation(), sx) &&
+                   same(f.spin(), sv);
+        x = qmul(spin, x);
+    }
+    CHECK(all_same && all_ll);
+    double qx[4], qv[4], sx[4], sv[4];
+    CHECK_OK(bingham_spin_filter_orientation_mode(h, qx));
+    CHECK_OK(bingham_spin_filter_spin_mode(h, qv));
+    CHECK_OK(bingham_spin_filter_angular_spread(h, sx, sv));
+    const Quaternion mx = f.orientation_mode(), mv = f.spin_mode();
+    CHECK(mx.w == qx[0] && mx.x == qx[1] && mx.y == qx[2] && mx.z == qx[3]);
+    CHECK(mv.w == qv[0] && mv.x == qv[1] && mv.y == qv[2] && mv.z == qv[3]);
+    const bingham::SpinSpread spread = f.angular_spread();
+    CHECK(std::memcmp(spread.orientation.data(), sx, sizeof sx) == 0 &&
+          std::memcmp(spread.spin.data(), sv, sizeof sv) == 0);
+    CHECK(spread.spin[3] > 0 && spread.orientation[3] > 0);
+
+    // errors: the C call's status and message; the filter unchanged
+    const auto before = f.state();
+    expect_error([&] { f.step(w, Quaternion(1, 0.1, 0, 0), o); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [&] {
+                     const double bad[4] = {1, 0.1, 0, 0};
+                     return bingham_spin_filter_step(h, nullptr, w.M.data(), w.z.data(), bad, o.M.data(),
+                                                     o.z.data());
+                 },
+                 "spin step with a non-unit observation");
+    expect_error([&] { f.step(Quaternion(std::nan(""), 0, 0, 1), w); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [&] {
+                     const double bad[4] = {std::nan(""), 0, 0, 1};
+                     return bingham_spin_filter_step(h, bad, w.M.data(), w.z.data(), nullptr, nullptr, nullptr);
+                 },
+                 "spin step with a NaN control");
+    Distribution skew = w;
+    skew.M[1] = 0.5;
+    expect_error([&] { f.step(skew); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [&] {
+                     return bingham_spin_filter_step(h, nullptr, skew.M.data(), skew.z.data(), nullptr, nullptr,
+                                                     nullptr);
+                 },
+                 "spin step with a non-orthogonal noise");
+    expect_error([&] { (void)f.log_likelihood(Quaternion(2, 0, 0, 0), o); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [&] {
+                     const double bad[4] = {2, 0, 0, 0};
+                     double ll;
+                     return bingham_spin_filter_log_likelihood(h, bad, o.M.data(), o.z.data(), &ll);
+                 },
+                 "spin log_likelihood with a non-unit observation");
+    expect_error([&] { f.step(bingham::noise_from_angle_std(2, 0.1)); }, BINGHAM_ERR_INVALID_DIMENSION,
+                 "a d = 2 noise");
+    expect_error([&] { f.set_state(uniform, Distribution({1, 0, 0, 1}, {-1, 0})); }, BINGHAM_ERR_INVALID_DIMENSION,
+                 "set_state with a d = 2 spin");
+    expect_error([&] { bingham::SpinFilter bad(uniform, skew); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [&] {
+                     bingham_spin_filter *x2 = nullptr;
+                     return bingham_spin_filter_new(uniform.M.data(), uniform.z.data(), skew.M.data(), skew.z.data(),
+                                                    &x2);
+                 },
+                 "a non-orthogonal spin prior");
+    CHECK(same(f.state().first, before.first) && same(f.state().second, before.second));
+
+    // clone: independent; set_state
+    bingham::SpinFilter g = f.clone();
+    g.step(w);
+    CHECK(same(f.state().second, before.second) && !same(g.state().first, before.first));
+    g.set_state(before.first, before.second);
+    CHECK(same(g.state().first, before.first) && same(g.state().second, before.second));
+    // move: the moved-from filter is empty, safe to use (throws), destroy and reassign
+    bingham::SpinFilter moved(std::move(f));
+    CHECK(!f && f.get() == nullptr && static_cast<bool>(moved));
+    expect_error([&] { f.step(w); }, BINGHAM_ERR_NULL_ARGUMENT, "step on a moved-from spin filter");
+    expect_error([&] { (void)f.spin_mode(); }, BINGHAM_ERR_NULL_ARGUMENT, "spin_mode of a moved-from spin filter");
+    expect_error([&] { (void)f.clone(); }, BINGHAM_ERR_NULL_ARGUMENT, "clone of a moved-from spin filter");
+    f = std::move(g);
+    CHECK(static_cast<bool>(f) && !g);
+    moved = std::move(f);  // releases moved's old handle (LSan would see a leak otherwise)
+    CHECK(!f && static_cast<bool>(moved));
+    bingham_spin_filter_free(h);
+
+    // a noiseless constant spin (uniform orientation prior, broad spin prior): the spin mode
+    // converges to it, and the orientation to the truth
+    bingham::SpinFilter c(uniform, spin_prior);
+    const Distribution sharp_w(eye, {0, -400, -400, -400}), sharp_o(eye, {0, -400, -400, -400});
+    x = axis_angle(-0.3, 0.8, 0.1, 2.0);
+    double err20 = 0, err = 0, x_err = 0;
+    for (int k = 0; k < 300; ++k) {
+        c.step(sharp_w, x, sharp_o);
+        err = angle_between(c.spin_mode(), spin);
+        x_err = angle_between(c.orientation_mode(), x);
+        if (k == 19) err20 = err;
+        x = qmul(spin, x);
+    }
+    if (err >= 1e-6 || x_err >= 1e-6)
+        std::fprintf(stderr, "    spin error %.3g rad (after 20 steps %.3g), orientation %.3g rad\n", err, err20,
+                     x_err);
+    CHECK(err < 1e-6 && x_err < 1e-6 && err20 < 0.2);
+}
+
 static void test_ahrs() {
     const double dt = 0.01;
     bingham::Ahrs a(dt);
@@ -536,6 +811,8 @@ int main() {
         test_free_functions();
         test_filter();
         test_filter_nonlinear();
+        test_filter_world();
+        test_spin_filter();
         test_ahrs();
     } catch (const std::exception &e) {
         std::fprintf(stderr, "unexpected exception: %s\n", e.what());

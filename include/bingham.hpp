@@ -25,8 +25,8 @@
  * the detection off. The two configurations live in different inline namespaces, so translation
  * units that differ in it do not violate the one-definition rule (their Filter types differ).
  *
- * Thread safety: as the C API -- one thread at a time per Filter/Ahrs object; everything else may
- * run concurrently.
+ * Thread safety: as the C API -- one thread at a time per Filter/SpinFilter/Ahrs object;
+ * everything else may run concurrently.
  */
 #ifndef BINGHAM_HPP
 #define BINGHAM_HPP
@@ -582,7 +582,9 @@ Distribution vector_observation(const Eigen::MatrixBase<DB> &body, const Eigen::
 /// quaternions, scalar first). Owns a `bingham_filter *`; move-only, copy with clone().
 ///
 /// Model: x[k+1] = x[k] (+) w[k], measurement = x[k] (+) v[k], with Bingham noises w, v (pass the
-/// same noise object every step: the library caches its moments). A moved-from Filter is empty:
+/// same noise object every step: the library caches its moments); the world-frame steps
+/// predict_world(), update_world(), log_likelihood_world() have Glover & Kaelbling's model
+/// x[k+1] = w[k] o u[k] o x[k], y = v o x (noises on the left). A moved-from Filter is empty:
 /// its methods throw Error(BINGHAM_ERR_NULL_ARGUMENT); destroying or assigning to it is fine.
 /// How the nonlinear steps control their error (bingham_nonlinear_options); the defaults are
 /// the library's: tolerance 0 = the step's own default (BINGHAM_NONLINEAR_PREDICT_TOLERANCE,
@@ -726,6 +728,37 @@ public:
         return log_likelihood_raw(vec(measurement), noise);
     }
 
+    // World-frame steps (Glover & Kaelbling 2013): `q o r` is the Hamilton product q r ("rotate
+    // by r, then by q"); the control and the noises act on the LEFT, in the world frame, where
+    // predict_rotation() and update() compose on the right (body frame). The two agree for d = 2
+    // and, without a control, for noise isotropic about the identity.
+
+    /// World-frame prediction without a control: x <- w o x, w ~ noise.
+    void predict_world(const Distribution &noise) { predict_world_raw(nullptr, noise); }
+    /// World-frame prediction x <- w o u o x with a known rotation u (d = 4), applied exactly.
+    void predict_world(const Quaternion &u, const Distribution &noise) {
+        const std::vector<double> v = vec(u);
+        predict_world_raw(&v, noise);
+    }
+    /// World-frame prediction turning an axis (d = 2) by the unit complex number u.
+    void predict_world(std::complex<double> u, const Distribution &noise) {
+        const std::vector<double> v = vec(u);
+        predict_world_raw(&v, noise);
+    }
+    /// World-frame update with a measured orientation y = v o x, v ~ noise (d = 4; exact Bayes).
+    void update_world(const Quaternion &y, const Distribution &noise) { update_world_raw(vec(y), noise); }
+    /// World-frame update with a measured axis (d = 2).
+    void update_world(std::complex<double> y, const Distribution &noise) { update_world_raw(vec(y), noise); }
+    /// Log predictive density of y = v o x (d = 4; surface measure; the filter is not changed):
+    /// what a bank of filters sums, and what picks between the readings of an ambiguous y.
+    double log_likelihood_world(const Quaternion &y, const Distribution &noise) const {
+        return log_likelihood_world_raw(vec(y), noise);
+    }
+    /// log_likelihood_world() for d = 2.
+    double log_likelihood_world(std::complex<double> y, const Distribution &noise) const {
+        return log_likelihood_world_raw(vec(y), noise);
+    }
+
     /// Update with a measured unit direction `body` (sensor frame) of the known unit `reference`
     /// (world frame), von Mises-Fisher concentration `kappa` (d = 4).
     void update_vector(const std::array<double, 3> &body, const std::array<double, 3> &reference, double kappa) {
@@ -813,6 +846,16 @@ public:
         static_assert(sizeof(D) == 0, "bingham::Filter::predict_rotation: pass an Eigen::Quaterniond (or "
                                       "bingham::Quaternion), not an Eigen vector: coeffs() is (x, y, z, w)");
     }
+    template <class D>
+    void predict_world(const Eigen::MatrixBase<D> &, const Distribution &) {
+        static_assert(sizeof(D) == 0, "bingham::Filter::predict_world: pass an Eigen::Quaterniond (or "
+                                      "bingham::Quaternion), not an Eigen vector: coeffs() is (x, y, z, w)");
+    }
+    template <class D>
+    void update_world(const Eigen::MatrixBase<D> &, const Distribution &) {
+        static_assert(sizeof(D) == 0, "bingham::Filter::update_world: pass an Eigen::Quaterniond (or "
+                                      "bingham::Quaternion), not an Eigen vector: coeffs() is (x, y, z, w)");
+    }
 #endif
 
 private:
@@ -835,6 +878,23 @@ private:
         detail::check(bingham_filter_log_likelihood(f_, measurement.data(), noise.M.data(), noise.z.data(), &out));
         return out;
     }
+    void predict_world_raw(const std::vector<double> *u, const Distribution &noise) {
+        check_noise(noise, "bingham::Filter::predict_world");
+        detail::require_dim(!u || u->size() == d_, "bingham::Filter::predict_world", "u must have d entries");
+        detail::check(bingham_filter_predict_world(f_, u ? u->data() : nullptr, noise.M.data(), noise.z.data()));
+    }
+    void update_world_raw(const std::vector<double> &y, const Distribution &noise) {
+        check_noise(noise, "bingham::Filter::update_world");
+        detail::require_dim(y.size() == d_, "bingham::Filter::update_world", "y must have d entries");
+        detail::check(bingham_filter_update_world(f_, y.data(), noise.M.data(), noise.z.data()));
+    }
+    double log_likelihood_world_raw(const std::vector<double> &y, const Distribution &noise) const {
+        check_noise(noise, "bingham::Filter::log_likelihood_world");
+        detail::require_dim(y.size() == d_, "bingham::Filter::log_likelihood_world", "y must have d entries");
+        double out = 0;
+        detail::check(bingham_filter_log_likelihood_world(f_, y.data(), noise.M.data(), noise.z.data(), &out));
+        return out;
+    }
     void require(const char *where) const {
         detail::require(f_ != nullptr, BINGHAM_ERR_NULL_ARGUMENT, where, "empty (moved-from) filter");
     }
@@ -848,6 +908,167 @@ private:
 
     bingham_filter *f_ = nullptr;
     std::size_t d_ = 0;
+};
+
+// ---- the spin filter (second-order quaternion Bingham filter) -------------------------------
+
+/// The angular spreads of a SpinFilter (radians; the spin's in radians per step): entries 0-2
+/// along the principal directions of the marginal, entry 3 the total (as Filter::angular_spread()).
+struct SpinSpread {
+    std::array<double, 4> orientation{};
+    std::array<double, 4> spin{};
+};
+
+/// The second-order quaternion Bingham filter of Glover & Kaelbling (2013): the orientation x and
+/// the spin v (the rotation per time step) of an object observed without a gyroscope, e.g. by a
+/// camera. Owns a `bingham_spin_filter *`; move-only, copy with clone() (e.g. for a bank of spin
+/// hypotheses, compared by their summed log_likelihood()).
+///
+/// Model (`q o r` = Hamilton product q r, "rotate by r, then by q"; quaternions scalar first):
+/// v[n] = w[n] o u[n] o v[n-1], x[n] = v[n-1] o x[n-1], y[n] = o[n] o x[n], with Bingham noises
+/// w (process, on the spin; mode at the identity for zero-mean noise) and o (observation), and an
+/// optional known change of spin u. The state is the product of two Bingham marginals,
+/// orientation() and spin(). Pass the same noise objects every step (the library caches them).
+/// A failed call throws Error and leaves the filter unchanged. A moved-from SpinFilter is empty:
+/// its methods throw Error(BINGHAM_ERR_NULL_ARGUMENT); destroying or assigning to it is fine.
+class SpinFilter {
+public:
+    /// A filter with the orientation prior `orientation` and the spin prior `spin` (both d = 4).
+    /// A uniform orientation prior (z all equal, e.g. 0) means nothing is known; a spin prior
+    /// centred on "no spin" has the mode (1, 0, 0, 0).
+    SpinFilter(const Distribution &orientation, const Distribution &spin) {
+        check4(orientation, "bingham::SpinFilter");
+        check4(spin, "bingham::SpinFilter");
+        detail::check(bingham_spin_filter_new(orientation.M.data(), orientation.z.data(), spin.M.data(), spin.z.data(),
+                                              &f_));
+    }
+    ~SpinFilter() { bingham_spin_filter_free(f_); }
+    SpinFilter(SpinFilter &&o) noexcept : f_(std::exchange(o.f_, nullptr)) {}
+    SpinFilter &operator=(SpinFilter &&o) noexcept {
+        if (this != &o) {
+            bingham_spin_filter_free(f_);
+            f_ = std::exchange(o.f_, nullptr);
+        }
+        return *this;
+    }
+    SpinFilter(const SpinFilter &) = delete;
+    SpinFilter &operator=(const SpinFilter &) = delete;
+
+    /// An independent copy (state and cached noises).
+    SpinFilter clone() const {
+        require("bingham::SpinFilter::clone");
+        bingham_spin_filter *c = nullptr;
+        detail::check(bingham_spin_filter_clone(f_, &c));
+        return SpinFilter(Adopt{}, c);
+    }
+    /// False for a moved-from filter.
+    explicit operator bool() const noexcept { return f_ != nullptr; }
+    /// The C handle (owned by this object).
+    bingham_spin_filter *get() noexcept { return f_; }
+    const bingham_spin_filter *get() const noexcept { return f_; }
+
+    /// A step without an observation (prediction only): v <- w o v, x <- v o x.
+    void step(const Distribution &w) { step_raw(nullptr, w, nullptr, nullptr); }
+    /// A step with the observed orientation y = o o x, o ~ `o` (y's sign does not matter).
+    void step(const Distribution &w, const Quaternion &y, const Distribution &o) { step_raw(nullptr, w, &y, &o); }
+    /// A step with a known change of spin u and no observation: v <- w o u o v, x <- v o x.
+    void step(const Quaternion &u, const Distribution &w) { step_raw(&u, w, nullptr, nullptr); }
+    /// A step with a known change of spin u and the observed orientation y.
+    void step(const Quaternion &u, const Distribution &w, const Quaternion &y, const Distribution &o) {
+        step_raw(&u, w, &y, &o);
+    }
+    /// The log predictive density of observing y = o o x at the step about to be taken (surface
+    /// measure on S^3; the filter is not changed). A bank of spin filters sums it over time to
+    /// compare its hypotheses; of two readings of an ambiguous observation, the larger wins.
+    double log_likelihood(const Quaternion &y, const Distribution &o) const {
+        require("bingham::SpinFilter::log_likelihood");
+        check4(o, "bingham::SpinFilter::log_likelihood");
+        const auto ya = y.array();
+        double out = 0;
+        detail::check(bingham_spin_filter_log_likelihood(f_, ya.data(), o.M.data(), o.z.data(), &out));
+        return out;
+    }
+
+    /// The orientation's marginal (M row-major, z ascending with z[3] = 0, mode = last column).
+    Distribution orientation() const { return state().first; }
+    /// The spin's marginal (the rotation per step).
+    Distribution spin() const { return state().second; }
+    /// Both marginals (orientation, spin) from one call.
+    std::pair<Distribution, Distribution> state() const {
+        require("bingham::SpinFilter::state");
+        std::pair<Distribution, Distribution> r;
+        for (Distribution *b : {&r.first, &r.second}) {
+            b->d = 4;
+            b->M.resize(16);
+            b->z.resize(4);
+        }
+        detail::check(bingham_spin_filter_get_state(f_, r.first.M.data(), r.first.z.data(), r.second.M.data(),
+                                                    r.second.z.data()));
+        return r;
+    }
+    /// Replaces both marginals (re-initialization; the cached noises stay).
+    void set_state(const Distribution &orientation, const Distribution &spin) {
+        require("bingham::SpinFilter::set_state");
+        check4(orientation, "bingham::SpinFilter::set_state");
+        check4(spin, "bingham::SpinFilter::set_state");
+        detail::check(bingham_spin_filter_set_state(f_, orientation.M.data(), orientation.z.data(), spin.M.data(),
+                                                    spin.z.data()));
+    }
+    /// The orientation estimate (the orientation's mode; sign arbitrary). An Eigen::Quaterniond
+    /// where Eigen is enabled (see EstimateQuaternion).
+    EstimateQuaternion orientation_mode() const {
+        require("bingham::SpinFilter::orientation_mode");
+        double q[4];
+        detail::check(bingham_spin_filter_orientation_mode(f_, q));
+        return Quaternion::from_array(q);
+    }
+    /// The spin estimate: the most probable rotation per step (its angle / the step's duration
+    /// is the angular rate).
+    EstimateQuaternion spin_mode() const {
+        require("bingham::SpinFilter::spin_mode");
+        double q[4];
+        detail::check(bingham_spin_filter_spin_mode(f_, q));
+        return Quaternion::from_array(q);
+    }
+    /// The angular spreads of the orientation (rad) and of the spin (rad per step).
+    SpinSpread angular_spread() const {
+        require("bingham::SpinFilter::angular_spread");
+        SpinSpread s;
+        detail::check(bingham_spin_filter_angular_spread(f_, s.orientation.data(), s.spin.data()));
+        return s;
+    }
+
+#if BINGHAM_HPP_EIGEN
+    /// Eigen vectors are refused for quaternions at compile time: pass an Eigen::Quaterniond
+    /// (coeffs() is (x, y, z, w), the library is (w, x, y, z)).
+    template <class D, class... Rest>
+    void step(const Eigen::MatrixBase<D> &, const Rest &...) {
+        static_assert(sizeof(D) == 0, "bingham::SpinFilter::step: pass an Eigen::Quaterniond (or "
+                                      "bingham::Quaternion), not an Eigen vector: coeffs() is (x, y, z, w)");
+    }
+#endif
+
+private:
+    struct Adopt {};
+    SpinFilter(Adopt, bingham_spin_filter *f) : f_(f) {}
+    void step_raw(const Quaternion *u, const Distribution &w, const Quaternion *y, const Distribution *o) {
+        require("bingham::SpinFilter::step");
+        check4(w, "bingham::SpinFilter::step");
+        if (o) check4(*o, "bingham::SpinFilter::step");
+        const std::array<double, 4> ua = u ? u->array() : std::array<double, 4>{},
+                                    ya = y ? y->array() : std::array<double, 4>{};
+        detail::check(bingham_spin_filter_step(f_, u ? ua.data() : nullptr, w.M.data(), w.z.data(),
+                                               y ? ya.data() : nullptr, o ? o->M.data() : nullptr,
+                                               o ? o->z.data() : nullptr));
+    }
+    void require(const char *where) const {
+        detail::require(f_ != nullptr, BINGHAM_ERR_NULL_ARGUMENT, where, "empty (moved-from) spin filter");
+    }
+    static void check4(const Distribution &b, const char *where) {
+        b.validate(where);
+        detail::require_dim(b.d == 4, where, "needs a d = 4 distribution");
+    }
+    bingham_spin_filter *f_ = nullptr;
 };
 
 // ---- the AHRS --------------------------------------------------------------------------------

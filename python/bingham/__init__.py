@@ -1,4 +1,5 @@
-"""bingham: Bingham distributions on spheres, the recursive Bingham filter and the Bingham AHRS.
+"""bingham: Bingham distributions on spheres, the recursive Bingham filter, the spin filter and
+the Bingham AHRS.
 
 The Python binding of the ``bingham`` Rust library, through its C ABI (``include/bingham.h``) and
 ``ctypes``: the package ships the compiled library (``bingham/_lib/libbingham*.so``, built by
@@ -32,8 +33,9 @@ The package's modules, one subject each (everything public is re-exported here, 
 ``bingham``): ``_library`` loads the library and binds its functions, :mod:`bingham.errors`
 holds :class:`Status`, :class:`BinghamError` and the messages, ``_arrays`` converts arguments,
 :mod:`bingham.distribution` has the functions of ``(m, z)``, :mod:`bingham.filter` the
-:class:`Filter` (``_callback`` runs its Python callables), :mod:`bingham.ahrs` the :class:`Ahrs`,
-:mod:`bingham.quaternion` the quaternion helpers (NumPy only, no library call).
+:class:`Filter` (``_callback`` runs its Python callables), :mod:`bingham.spin` the
+:class:`SpinFilter` (Glover & Kaelbling's orientation-and-spin filter), :mod:`bingham.ahrs` the
+:class:`Ahrs`, :mod:`bingham.quaternion` the quaternion helpers (NumPy only, no library call).
 """
 
 from __future__ import annotations
@@ -76,6 +78,7 @@ from .distribution import (
     vector_observation,
 )
 from .filter import PREDICT_TOLERANCE, UPDATE_TOLERANCE, Filter, NonlinearReport
+from .spin import SpinFilter
 from .quaternion import (
     OrientationError,
     from_scipy,
@@ -122,6 +125,7 @@ __all__ = [
     "mode",
     "deterministic_samples",
     "Filter",
+    "SpinFilter",
     "vector_observation",
     "noise_from_angle_std",
     "angular_spread",

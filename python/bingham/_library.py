@@ -81,6 +81,9 @@ _SIGNATURES = {
         _STATUS,
         [ctypes.c_void_p, _D, _D, ctypes.c_double, _D],
     ),
+    "bingham_filter_predict_world": (_STATUS, [ctypes.c_void_p, _D, _D, _D]),
+    "bingham_filter_update_world": (_STATUS, [ctypes.c_void_p, _D, _D, _D]),
+    "bingham_filter_log_likelihood_world": (_STATUS, [ctypes.c_void_p, _D, _D, _D, _D]),
     "bingham_filter_predict_nonlinear": (_STATUS, [ctypes.c_void_p, _TRANSITION_FN, ctypes.c_void_p, _D, _D]),
     "bingham_filter_update_nonlinear": (_STATUS, [ctypes.c_void_p, _LOG_LIKELIHOOD_FN, ctypes.c_void_p]),
     "bingham_nonlinear_options_default": (_STATUS, [ctypes.c_void_p]),
@@ -110,6 +113,16 @@ _SIGNATURES = {
     "bingham_ahrs_gyro_bias": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_gyro_bias_covariance": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_mag_latency_estimate": (_STATUS, [ctypes.c_void_p, _D]),
+    "bingham_spin_filter_new": (_STATUS, [_D, _D, _D, _D, ctypes.POINTER(ctypes.c_void_p)]),
+    "bingham_spin_filter_free": (None, [ctypes.c_void_p]),
+    "bingham_spin_filter_clone": (_STATUS, [ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p)]),
+    "bingham_spin_filter_step": (_STATUS, [ctypes.c_void_p, _D, _D, _D, _D, _D, _D]),
+    "bingham_spin_filter_log_likelihood": (_STATUS, [ctypes.c_void_p, _D, _D, _D, _D]),
+    "bingham_spin_filter_set_state": (_STATUS, [ctypes.c_void_p, _D, _D, _D, _D]),
+    "bingham_spin_filter_get_state": (_STATUS, [ctypes.c_void_p, _D, _D, _D, _D]),
+    "bingham_spin_filter_orientation_mode": (_STATUS, [ctypes.c_void_p, _D]),
+    "bingham_spin_filter_spin_mode": (_STATUS, [ctypes.c_void_p, _D]),
+    "bingham_spin_filter_angular_spread": (_STATUS, [ctypes.c_void_p, _D, _D]),
 }
 
 

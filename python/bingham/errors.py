@@ -71,6 +71,9 @@ _PYTHON_NAMES: Dict[str, str] = {
     "bingham_filter_update_nonlinear_opts": "Filter.update_nonlinear",
     "bingham_nonlinear_options_default": "Filter.update_nonlinear",
     "bingham_filter_angular_spread": "Filter.angular_spread",
+    "bingham_filter_predict_world": "Filter.predict_world",
+    "bingham_filter_update_world": "Filter.update_world",
+    "bingham_filter_log_likelihood_world": "Filter.log_likelihood_world",
     "bingham_ahrs_params_default": "AhrsParams.default",
     "bingham_ahrs_new": "Ahrs",
     "bingham_ahrs_update": "Ahrs.update",
@@ -83,6 +86,15 @@ _PYTHON_NAMES: Dict[str, str] = {
     "bingham_ahrs_gyro_bias": "Ahrs.gyro_bias",
     "bingham_ahrs_gyro_bias_covariance": "Ahrs.gyro_bias_covariance",
     "bingham_ahrs_mag_latency_estimate": "Ahrs.mag_latency_estimate",
+    "bingham_spin_filter_new": "SpinFilter",
+    "bingham_spin_filter_clone": "SpinFilter.clone",
+    "bingham_spin_filter_step": "SpinFilter.step",
+    "bingham_spin_filter_log_likelihood": "SpinFilter.log_likelihood",
+    "bingham_spin_filter_set_state": "SpinFilter.set_state",
+    "bingham_spin_filter_get_state": "SpinFilter.state",
+    "bingham_spin_filter_orientation_mode": "SpinFilter.orientation_mode",
+    "bingham_spin_filter_spin_mode": "SpinFilter.spin_mode",
+    "bingham_spin_filter_angular_spread": "SpinFilter.angular_spread",
 }
 
 _C_NAME = re.compile(r"(bingham_\w+): ")

@@ -91,10 +91,13 @@ class Filter:
     scalar first), owning a ``bingham_filter`` handle.
 
     System ``x[k+1] = x[k] ⊕ w[k]``, measurement ``z[k] = x[k] ⊕ v[k]`` with Bingham noises
-    given as ``(m, z)`` pairs; nonlinear models ``x[k+1] = a(x[k]) ⊕ w[k]`` and any likelihood
-    through Python callables (:meth:`predict_nonlinear`, :meth:`update_nonlinear`). A failed
-    call raises :class:`BinghamError` and leaves the filter unchanged. Use one filter per
-    thread at a time; :meth:`clone` gives an independent copy.
+    given as ``(m, z)`` pairs; the world-frame model of Glover & Kaelbling,
+    ``x[k+1] = w ∘ u ∘ x[k]``, ``y = v ∘ x`` (noises on the left), with :meth:`predict_world`,
+    :meth:`update_world` and :meth:`log_likelihood_world`; nonlinear models
+    ``x[k+1] = a(x[k]) ⊕ w[k]`` and any likelihood through Python callables
+    (:meth:`predict_nonlinear`, :meth:`update_nonlinear`). A failed call raises
+    :class:`BinghamError` and leaves the filter unchanged. Use one filter per thread at a time;
+    :meth:`clone` gives an independent copy.
     The handle is released by :meth:`close`, by leaving a ``with`` block, or when the object
     is garbage collected.
     """
@@ -310,6 +313,36 @@ class Filter:
         out = np.empty(1)
         _check(
             lib().bingham_filter_log_likelihood(self._h(), _ptr(meas), _ptr(m_v), _ptr(z_v), _ptr(out))
+        )
+        return float(out[0])
+
+    def predict_world(self, m_w: ArrayLike, z_w: ArrayLike, *, u: Optional[ArrayLike] = None) -> None:
+        """World-frame prediction (Glover & Kaelbling 2013): the state becomes the distribution
+        of ``w ∘ u ∘ x``, w ~ Bingham(m_w, z_w), where ``q ∘ r`` is the Hamilton product ``q r``
+        ("rotate by r, then by q"): the control ``u`` (a known unit rotation, applied exactly;
+        ``None``: the identity) and the noise act on the left, in the world frame, where
+        :meth:`predict_rotation` composes on the right (body frame). The two agree for d = 2 and,
+        without ``u``, for noise isotropic about the identity. Exact in the second moment."""
+        u_arr = None if u is None else _in(u, "u", (self.d,))
+        m_w, z_w = self._noise(m_w, z_w, ("m_w", "z_w"))
+        _check(lib().bingham_filter_predict_world(self._h(), _ptr(u_arr), _ptr(m_w), _ptr(z_w)))
+
+    def update_world(self, y: ArrayLike, m_v: ArrayLike, z_v: ArrayLike) -> None:
+        """World-frame update (exact Bayes product) with the observation ``y = v ∘ x``,
+        v ~ Bingham(m_v, z_v) (the noise on the left; :meth:`update` has ``x ⊕ v``). The sign of
+        ``y`` does not matter."""
+        y = _in(y, "y", (self.d,))
+        m_v, z_v = self._noise(m_v, z_v, ("m_v", "z_v"))
+        _check(lib().bingham_filter_update_world(self._h(), _ptr(y), _ptr(m_v), _ptr(z_v)))
+
+    def log_likelihood_world(self, y: ArrayLike, m_v: ArrayLike, z_v: ArrayLike) -> float:
+        """Log predictive density of ``y = v ∘ x`` (surface measure; the filter is not changed):
+        what a bank of filters sums, and what picks between the readings of an ambiguous ``y``."""
+        y = _in(y, "y", (self.d,))
+        m_v, z_v = self._noise(m_v, z_v, ("m_v", "z_v"))
+        out = np.empty(1)
+        _check(
+            lib().bingham_filter_log_likelihood_world(self._h(), _ptr(y), _ptr(m_v), _ptr(z_v), _ptr(out))
         )
         return float(out[0])
 

@@ -169,7 +169,7 @@ def test_every_called_c_function_has_a_python_name():
             with open(os.path.join(pkg, name), encoding="utf-8") as f:
                 called |= set(re.findall(r"lib\(\)\.(bingham_\w+)", f.read()))
     utilities = {"bingham_version", "bingham_status_str", "bingham_last_error_message",
-                 "bingham_filter_free", "bingham_ahrs_free"}
+                 "bingham_filter_free", "bingham_ahrs_free", "bingham_spin_filter_free"}
     assert called - utilities <= set(_PYTHON_NAMES), sorted(called - utilities - set(_PYTHON_NAMES))
     for c_name, py_name in _PYTHON_NAMES.items():
         assert c_name in _SIGNATURES, c_name
