@@ -1,7 +1,8 @@
 // Helpers shared by the Eigen-based C++ test programs (reference_eigen.cpp, filter_eigen.cpp,
-// vector_eigen.cpp, deterministic_eigen.cpp): random test inputs from a caller-owned generator,
-// row-major conversion, and the composition x (+) y written independently of the library
-// (std::complex for d = 2, Eigen's quaternion product for d = 4). Header-only, C++11.
+// vector_eigen.cpp, deterministic_eigen.cpp, world_eigen.cpp): random test inputs from a
+// caller-owned generator, row-major conversion, and the composition x (+) y written
+// independently of the library (std::complex for d = 2, Eigen's quaternion product for d = 4).
+// Header-only, C++11.
 #ifndef BINGHAM_C_TESTS_EIGEN_UTIL_HPP
 #define BINGHAM_C_TESTS_EIGEN_UTIL_HPP
 

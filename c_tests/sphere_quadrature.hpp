@@ -1,6 +1,7 @@
 // Brute-force quadrature on S^1, S^2, S^3 for the Eigen-based reference programs
-// (reference_eigen.cpp, filter_eigen.cpp): Gauss-Legendre in the polar angles, trapezoid in the
-// last angle (trapezoid alone on the circle), surface measure. Independent of the library.
+// (reference_eigen.cpp, filter_eigen.cpp, world_eigen.cpp): Gauss-Legendre in the polar angles,
+// trapezoid in the last angle (trapezoid alone on the circle), surface measure. Independent of
+// the library.
 #ifndef BINGHAM_C_TESTS_SPHERE_QUADRATURE_HPP
 #define BINGHAM_C_TESTS_SPHERE_QUADRATURE_HPP
 

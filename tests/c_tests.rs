@@ -273,6 +273,28 @@ fn cpp_vector_eigen_references() {
     run(&exe);
 }
 
+/// The world-frame steps and the spin filter against Eigen references (`world_eigen.cpp`).
+#[test]
+fn cpp_world_eigen_references() {
+    let inc = eigen_include();
+    let inc = inc.to_str().expect("UTF-8 path");
+    let exe = build(
+        "world_eigen.cpp",
+        "world_eigen",
+        "c++11",
+        &["-isystem", inc],
+        Link::Static,
+    );
+    run(&exe);
+}
+
+/// The spin filter's C API and the world-frame steps' error contract (`spin_api.c`).
+#[test]
+fn c_spin_and_world_api() {
+    let exe = build("spin_api.c", "spin_api", "c99", &[], Link::Static);
+    run(&exe);
+}
+
 #[test]
 fn c_vector_and_ahrs_api() {
     let exe = build("ahrs_api.c", "ahrs_api", "c99", &[], Link::Static);

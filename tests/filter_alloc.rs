@@ -1,12 +1,17 @@
 //! After warm-up, filter steps perform no heap allocation at all: a counting global allocator
 //! (this test binary only) sees zero allocations over many predict + update steps, through the
-//! Rust API and through the C API, over vector-observation updates, and over AHRS samples.
+//! Rust API and through the C API, over vector-observation updates, over the world-frame steps
+//! (`predict_world` with and without control, `update_world`, `log_likelihood_world`), over
+//! spin-filter steps (with and without control and observation, and the spin filter's
+//! log-likelihood, modes, spreads and state), and over AHRS samples.
 
 mod filter_common;
 
 use bingham::ffi::bingham_status;
 use bingham::ffi::filter::*;
-use bingham::filter::BinghamFilter;
+use bingham::ffi::spin::*;
+use bingham::ffi::world::*;
+use bingham::filter::{BinghamFilter, SpinFilter};
 use filter_common::simulate;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -55,9 +60,197 @@ fn filter_steps_do_not_allocate() {
         rust_api(&sc);
         c_api(&sc);
         nonlinear_steps(&sc);
+        world_steps(&sc);
     }
+    spin_steps();
     vector_updates();
     ahrs_steps();
+}
+
+/// The world-frame steps through the Rust and the C API, after one warm-up step of each with the
+/// same noises: `predict_world` with a control and without (NULL), `log_likelihood_world`,
+/// `update_world`.
+fn world_steps(sc: &Scenario) {
+    let meas: Vec<Vec<f64>> = (0..3).flat_map(|r| simulate(sc, r).1).collect();
+    let u = normalized(&vec![1.0; sc.d]);
+    let ok = bingham_status::BINGHAM_OK;
+    let mut f = BinghamFilter::new(sc.d, &sc.m0, &sc.z0).unwrap();
+    f.predict_world(Some(&u), &sc.mw, &sc.zw).unwrap();
+    f.update_world(&meas[0], &sc.mv, &sc.zv).unwrap();
+    let mut mode = vec![0.0; sc.d];
+    let before = allocations();
+    let mut ll = 0.0;
+    for (k, y) in meas.iter().enumerate() {
+        let control = (k % 2 == 0).then_some(&u[..]);
+        f.predict_world(control, &sc.mw, &sc.zw).unwrap();
+        ll += f.log_likelihood_world(y, &sc.mv, &sc.zv).unwrap();
+        f.update_world(y, &sc.mv, &sc.zv).unwrap();
+        f.mode_into(&mut mode).unwrap();
+    }
+    let n = allocations() - before;
+    assert!(ll.is_finite());
+    assert_eq!(
+        n,
+        0,
+        "d = {}: {n} allocations in {} world-frame steps (Rust API)",
+        sc.d,
+        meas.len()
+    );
+    let mut h: *mut bingham_filter = std::ptr::null_mut();
+    // SAFETY: valid arrays of the documented lengths; the handle is freed below.
+    unsafe {
+        assert_eq!(
+            bingham_filter_new(sc.d, sc.m0.as_ptr(), sc.z0.as_ptr(), &mut h),
+            ok
+        );
+        assert_eq!(
+            bingham_filter_predict_world(h, u.as_ptr(), sc.mw.as_ptr(), sc.zw.as_ptr()),
+            ok
+        );
+        assert_eq!(
+            bingham_filter_update_world(h, meas[0].as_ptr(), sc.mv.as_ptr(), sc.zv.as_ptr()),
+            ok
+        );
+        let before = allocations();
+        for (k, y) in meas.iter().enumerate() {
+            let control = if k % 2 == 0 {
+                u.as_ptr()
+            } else {
+                std::ptr::null()
+            };
+            let s1 = bingham_filter_predict_world(h, control, sc.mw.as_ptr(), sc.zw.as_ptr());
+            let s2 = bingham_filter_log_likelihood_world(
+                h,
+                y.as_ptr(),
+                sc.mv.as_ptr(),
+                sc.zv.as_ptr(),
+                &mut ll,
+            );
+            let s3 = bingham_filter_update_world(h, y.as_ptr(), sc.mv.as_ptr(), sc.zv.as_ptr());
+            assert!([s1, s2, s3].iter().all(|&s| s == ok));
+        }
+        let n = allocations() - before;
+        bingham_filter_free(h);
+        assert_eq!(
+            n,
+            0,
+            "d = {}: {n} allocations in {} world-frame steps (C API)",
+            sc.d,
+            meas.len()
+        );
+    }
+    println!(
+        "d = {}: {} world-frame steps (Rust and C API): 0 allocations",
+        sc.d,
+        meas.len()
+    );
+}
+
+/// A spinning object observed most steps: the spin filter's steps (with and without control,
+/// with and without observation), log-likelihood, modes, spreads and state, through the Rust and
+/// the C API, after one warm-up step with the same noises.
+fn spin_steps() {
+    let identity: [f64; 16] = std::array::from_fn(|i| if i % 5 == 0 { 1.0 } else { 0.0 });
+    let (z_x, z_v) = ([0.0; 4], [0.0, -3.0, -3.0, -3.0]);
+    let (z_w, z_o) = ([0.0, -400.0, -400.0, -10.0], [0.0, -40.0, -40.0, -10.0]);
+    let u = normalized(&[1.0, 0.02, -0.01, 0.03]);
+    let spin = normalized(&[0.9, 0.3, -0.2, 0.1]);
+    let mut x = vec![1.0, 0.0, 0.0, 0.0];
+    let ys: Vec<Vec<f64>> = (0..300)
+        .map(|_| {
+            x = bingham::quaternion::compose(&spin, &x).unwrap();
+            x.clone()
+        })
+        .collect();
+    let ok = bingham_status::BINGHAM_OK;
+    let (mut m, mut z, mut m2, mut z2) = ([0.0; 16], [0.0; 4], [0.0; 16], [0.0; 4]);
+    let (mut xs, mut vs) = ([0.0; 4], [0.0; 4]);
+    let mut f = SpinFilter::new(&identity, &z_x, &identity, &z_v).unwrap();
+    f.step(Some(&u), &identity, &z_w, Some(&ys[0]), &identity, &z_o)
+        .unwrap();
+    let before = allocations();
+    let mut sum = 0.0;
+    for (k, y) in ys.iter().enumerate() {
+        let control = (k % 2 == 0).then_some(&u[..]);
+        let observed = (k % 4 != 3).then_some(&y[..]);
+        sum += f.log_likelihood(y, &identity, &z_o).unwrap();
+        f.step(control, &identity, &z_w, observed, &identity, &z_o)
+            .unwrap();
+        sum += f.orientation_mode()[0] + f.spin_mode()[0];
+        f.angular_spread_into(&mut xs, &mut vs).unwrap();
+        f.state_into(&mut m, &mut z, &mut m2, &mut z2).unwrap();
+    }
+    let n = allocations() - before;
+    assert!(sum.is_finite());
+    assert_eq!(
+        n,
+        0,
+        "{n} allocations in {} spin steps (Rust API)",
+        ys.len()
+    );
+    let mut h: *mut bingham_spin_filter = std::ptr::null_mut();
+    // SAFETY: valid arrays of the documented lengths; the handle is freed below.
+    unsafe {
+        let id = identity.as_ptr();
+        assert_eq!(
+            bingham_spin_filter_new(id, z_x.as_ptr(), id, z_v.as_ptr(), &mut h),
+            ok
+        );
+        assert_eq!(
+            bingham_spin_filter_step(
+                h,
+                u.as_ptr(),
+                id,
+                z_w.as_ptr(),
+                ys[0].as_ptr(),
+                id,
+                z_o.as_ptr()
+            ),
+            ok
+        );
+        let mut ll = 0.0;
+        let mut q = [0.0; 4];
+        let before = allocations();
+        for (k, y) in ys.iter().enumerate() {
+            let control = if k % 2 == 0 {
+                u.as_ptr()
+            } else {
+                std::ptr::null()
+            };
+            let s1 = bingham_spin_filter_log_likelihood(h, y.as_ptr(), id, z_o.as_ptr(), &mut ll);
+            // without observation, the observation noise is not passed
+            let s2 = if k % 4 == 3 {
+                bingham_spin_filter_step(
+                    h,
+                    control,
+                    id,
+                    z_w.as_ptr(),
+                    std::ptr::null(),
+                    std::ptr::null(),
+                    std::ptr::null(),
+                )
+            } else {
+                bingham_spin_filter_step(h, control, id, z_w.as_ptr(), y.as_ptr(), id, z_o.as_ptr())
+            };
+            let s3 = bingham_spin_filter_spin_mode(h, q.as_mut_ptr());
+            let s4 = bingham_spin_filter_angular_spread(h, xs.as_mut_ptr(), vs.as_mut_ptr());
+            let s5 = bingham_spin_filter_get_state(
+                h,
+                m.as_mut_ptr(),
+                z.as_mut_ptr(),
+                m2.as_mut_ptr(),
+                z2.as_mut_ptr(),
+            );
+            assert!([s1, s2, s3, s4, s5].iter().all(|&s| s == ok));
+        }
+        let n = allocations() - before;
+        bingham_spin_filter_free(h);
+        assert_eq!(n, 0, "{n} allocations in {} spin steps (C API)", ys.len());
+    }
+    println!(
+        "{} spin-filter steps (Rust and C API): 0 allocations",
+        ys.len()
+    );
 }
 
 /// `update_vector`, `log_likelihood_vector` and `angular_spread_into` after a predict.

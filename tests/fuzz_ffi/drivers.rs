@@ -52,6 +52,10 @@ pub(crate) const SHARE_AHRS: f64 = 0.05;
 /// top of the shares above).
 pub(crate) const SHARE_NONLINEAR: f64 = 0.1;
 
+/// Share of `BINGHAM_FUZZ_CASES` for the spin filter's call sequences (on top of the shares
+/// above).
+pub(crate) const SHARE_SPIN: f64 = 0.04;
+
 pub(crate) fn cases_for(weight: f64, total_weight: f64, share: f64) -> u64 {
     ((total_cases() as f64) * share * weight / total_weight).ceil() as u64
 }

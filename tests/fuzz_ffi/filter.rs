@@ -1,4 +1,6 @@
-//! The filter: random call sequences.
+//! The filter: random call sequences (the body-frame steps, the vector observation and the
+//! world-frame steps `bingham_filter_predict_world` / `_update_world` /
+//! `_log_likelihood_world`, whose `u = NULL` is the identity, not an error).
 //!
 //! One case is one sequence: a filter (created with random, sometimes hostile, parameters) and a
 //! "twin" created alike that receives only the calls that succeeded on the first. After every call:
@@ -206,6 +208,9 @@ unsafe fn filter_call(
             9 => bingham_filter_update_vector(fp, p[0], p[1], a.arrays[2][0]),
             10 => bingham_filter_log_likelihood_vector(fp, p[0], p[1], a.arrays[2][0], o(0)),
             11 => bingham_filter_angular_spread(fp, o(0)),
+            12 => bingham_filter_predict_world(fp, p[0], p[1], p[2]),
+            13 => bingham_filter_update_world(fp, p[0], p[1], p[2]),
+            14 => bingham_filter_log_likelihood_world(fp, p[0], p[1], p[2], o(0)),
             5 => bingham_filter_get_state(fp, o(0), o(1)),
             6 => bingham_filter_mode(fp, o(0)),
             7 => {
@@ -244,7 +249,7 @@ unsafe fn filter_call(
     st
 }
 
-const FILTER_OPS: [&str; 12] = [
+const FILTER_OPS: [&str; 15] = [
     "bingham_filter_predict",
     "bingham_filter_predict_rotation",
     "bingham_filter_update",
@@ -257,7 +262,25 @@ const FILTER_OPS: [&str; 12] = [
     "bingham_filter_update_vector",
     "bingham_filter_log_likelihood_vector",
     "bingham_filter_angular_spread",
+    "bingham_filter_predict_world",
+    "bingham_filter_update_world",
+    "bingham_filter_log_likelihood_world",
 ];
+
+/// The operations that must not change the state (const handle, or outputs only).
+fn read_only(op: usize) -> bool {
+    matches!(op, 4..=8 | 10 | 11 | 14)
+}
+
+/// The operations with output arrays or pointer outputs (which the harness may make NULL).
+fn has_outputs(op: usize) -> bool {
+    matches!(op, 4..=8 | 10 | 11 | 14)
+}
+
+/// `bingham_filter_predict_world` with `u = NULL`: the identity control, a valid call.
+fn null_is_identity(op: usize, attack: &FAttack) -> bool {
+    op == 12 && *attack == FAttack::Null(0)
+}
 
 /// A direction (unit 3-vector) for `bingham_filter_update_vector`: random, or an axis, or a
 /// tiny perturbation of one (exactly (anti)parallel pairs of body and reference included).
@@ -421,7 +444,7 @@ fn filter_sequence(
     let steps = 1 + rng.below(40);
     let mut result = Ok(());
     for step in 0..steps {
-        let op = match rng.below(25) {
+        let op = match rng.below(31) {
             0..=5 => 0,
             6..=7 => 1,
             8..=13 => 2,
@@ -432,6 +455,9 @@ fn filter_sequence(
             20..=21 => 9,
             22..=23 => 10,
             24 => 11,
+            25..=26 => 12,
+            27..=28 => 13,
+            29 => 14,
             _ => {
                 if rng.chance(0.5) {
                     7
@@ -454,13 +480,13 @@ fn filter_sequence(
                 attack: FAttack::None,
                 desc: String::new(),
             },
-            1 => FArgs {
+            1 | 12 => FArgs {
                 arrays: vec![rng.unit_vector(d), noise.0, noise.1],
                 kinds: vec![U, M, Z],
                 attack: FAttack::None,
                 desc: String::new(),
             },
-            2 | 4 => FArgs {
+            2 | 4 | 13 | 14 => FArgs {
                 arrays: vec![filter_measurement(&mut rng, &sm, d), noise.0, noise.1],
                 kinds: vec![U, M, Z],
                 attack: FAttack::None,
@@ -495,15 +521,19 @@ fn filter_sequence(
             },
         };
         spoil_filter_args(&mut rng, &mut a, d);
+        if op == 12 && a.attack == FAttack::None && rng.chance(0.25) {
+            // no control: u = NULL
+            a.attack = FAttack::Null(0);
+        }
         // outputs: array outputs count as argument indices after the inputs
         let out_kinds: &[Kind] = match op {
-            4 | 10 => &[One],
+            4 | 10 | 14 => &[One],
             5 => &[DD, D],
             6 | 11 => &[D],
             _ => &[],
         };
         let n_args = a.arrays.len() + out_kinds.len() + usize::from(op == 7 || op == 8);
-        if matches!(a.attack, FAttack::None) && op >= 4 && op != 9 && rng.chance(0.25) {
+        if matches!(a.attack, FAttack::None) && has_outputs(op) && rng.chance(0.25) {
             let i = a.arrays.len() + rng.below(n_args - a.arrays.len());
             a.attack = if rng.chance(0.5) {
                 FAttack::Null(i)
@@ -550,6 +580,7 @@ fn filter_sequence(
             break;
         }
         let want = match a.attack {
+            _ if null_is_identity(op, &a.attack) => None,
             FAttack::NullHandle
             | FAttack::MisalignedHandle
             | FAttack::Null(_)
@@ -601,7 +632,7 @@ fn filter_sequence(
                 }
                 continue;
             }
-            if matches!(a.attack, FAttack::None) && op != 3 {
+            if (matches!(a.attack, FAttack::None) || null_is_identity(op, &a.attack)) && op != 3 {
                 // valid arguments: the documented failures are NOT_CONVERGED / NUMERICAL only
                 if st != BINGHAM_ERR_NOT_CONVERGED && st != BINGHAM_ERR_NUMERICAL {
                     result = fail(format!("valid arguments refused: {}", last_error()));
@@ -618,7 +649,7 @@ fn filter_sequence(
             result = fail("OK from a d = 2 filter".into());
             break;
         }
-        if op >= 4 && op != 9 && after != before {
+        if read_only(op) && after != before {
             result = fail("a read-only call changed the state".into());
             break;
         }
@@ -628,7 +659,7 @@ fn filter_sequence(
             break;
         }
         match op {
-            4 | 10 => {
+            4 | 10 | 14 => {
                 let v = outs[0].values()[0];
                 if !v.is_finite() || !outs[0].guards_ok() {
                     result = fail(format!("log-likelihood {v}"));
@@ -698,7 +729,7 @@ fn filter_sequence(
             _ => {}
         }
         // the twin repeats the successful call (same arguments); states must agree bit for bit
-        if op <= 3 || op == 9 {
+        if !read_only(op) {
             let mut twin_outs: Vec<Buf> = vec![];
             let mut tp = [handle_sentinel()];
             let mut td = [usize::MAX; 2];

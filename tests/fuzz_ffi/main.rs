@@ -26,8 +26,8 @@
 //! The modules, in the order a case runs through them: [`kinds`] (the table of the stateless
 //! functions), [`case`] (one case: arguments, call, checks), [`invariants`] (per function),
 //! [`drivers`] (case counts, seeds, the loops and the tests of the stateless functions), then
-//! the stateful and special harnesses [`filter`], [`vectors`], [`ahrs_inputs`] and [`ahrs`],
-//! [`samples`], [`nonlinear`], [`helpers`]; [`status`] reads statuses and the last error message.
+//! the stateful and special harnesses [`filter`] (the world-frame steps included), [`spin`],
+//! [`vectors`], [`ahrs_inputs`] and [`ahrs`], [`samples`], [`nonlinear`], [`helpers`]; [`status`] reads statuses and the last error message.
 //! The generic generators, buffers and the crash reporter are in `testkit::fuzz`.
 
 mod ahrs;
@@ -40,5 +40,6 @@ mod invariants;
 mod kinds;
 mod nonlinear;
 mod samples;
+mod spin;
 mod status;
 mod vectors;
