@@ -288,10 +288,17 @@ fn cpp_world_eigen_references() {
     run(&exe);
 }
 
-/// The spin filter's C API and the world-frame steps' error contract (`spin_api.c`).
+/// The spin filter's C API (`spin_api.c`).
 #[test]
-fn c_spin_and_world_api() {
+fn c_spin_api() {
     let exe = build("spin_api.c", "spin_api", "c99", &[], Link::Static);
+    run(&exe);
+}
+
+/// The world-frame steps' C API: success paths and error contract (`world_api.c`).
+#[test]
+fn c_world_api() {
+    let exe = build("world_api.c", "world_api", "c99", &[], Link::Static);
     run(&exe);
 }
 

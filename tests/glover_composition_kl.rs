@@ -42,17 +42,17 @@
 //! `cargo test --release --test glover_composition_kl -- --nocapture` prints the tables; figures
 //! and the comparison with the paper: `docs/accuracy.md`.
 
+mod glover_common;
+
 use bingham::filter::BinghamFilter;
 use bingham::quaternion::{left_matrix, q4};
 use bingham::{log_normalization, Bingham};
+use glover_common::{mul, rmat, I4, Q};
 use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use std::f64::consts::PI;
 
-const I4: [f64; 16] = [
-    1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
-];
 /// The paper's three concentration settings.
 const SETTINGS: [(&str, [f64; 3]); 3] = [
     ("(-50)^3", [-50.0, -50.0, -50.0]),
@@ -63,18 +63,6 @@ const SETTINGS: [(&str, [f64; 3]); 3] = [
 /// to it is the error estimate.
 const H: f64 = 0.2;
 const H_COARSE: f64 = 0.27;
-
-type Q = [f64; 4];
-
-fn mul(a: &Q, b: &Q) -> Q {
-    q4::mul(a, b)
-}
-
-/// `R(q)`: `p ∘ q = R(q) p`.
-fn rmat(q: &Q) -> Matrix4<f64> {
-    let [w, x, y, z] = *q;
-    Matrix4::new(w, -x, -y, -z, x, w, z, -y, y, -z, w, x, z, y, -x, w)
-}
 
 fn m4(m: &DMatrix<f64>) -> Matrix4<f64> {
     Matrix4::from_fn(|i, j| m[(i, j)])

@@ -44,18 +44,18 @@
 //!   alone, observing `y_n ∘ y_{n−1}⁻¹` when two successive frames have detections (of the two
 //!   distinct differences the interpretations give, the likelier), with the moment-matched noise
 //!   `B_o ∘ B_o⁻¹`; prior and process noise as QBF-2's spin.
-//! - `EKF-2`: the second-order EKF written here (LaViola's quaternion EKF, discrete time, as the
-//!   paper adapted it): state `(x, v)` in R⁸, `x ← v x`, `v ← v` with Gaussian noise on `v`
-//!   whose covariance is the process noise's (sampled, the hemisphere `w₀ ≥ 0`) rotated into the
-//!   state's frame (`R(v) Σ_w R(v)ᵀ`), measurement `h(x) = x/|x|` with the detection noise's
-//!   covariance `R(x) Σ_o R(x)ᵀ`, state renormalized after each step, Joseph-form update. It is
-//!   initialized at the first detection (`x = y`), the spin prior the Gaussian matched to
-//!   `(−3)³`; of the interpretations (and signs) the one with the smaller Mahalanobis innovation;
-//!   a dark frame is the nearest point of the dark observation's circle with the tilt variance
-//!   of `Bingham(0, −3.6, −3.6, 0)`. Variants, to see what matters: `EKF-2 no dark` (dark frames
-//!   skipped), `EKF-2 dark Gaussian` (a dark frame is `y_dark` with the Gaussian matched to the
-//!   dark noise, the paper's moment mapping taken literally), `EKF-2 reported y` (the detection's
-//!   interpretation as reported, not chosen).
+//! - `EKF-2`: the second-order EKF in `tests/glover_common/ekf2.rs` (LaViola's quaternion EKF,
+//!   discrete time, as the paper adapted it): state `(x, v)` in R⁸, `x ← v x`, `v ← v` with
+//!   Gaussian noise on `v` whose covariance is the process noise's (sampled, the hemisphere
+//!   `w₀ ≥ 0`) rotated into the state's frame (`R(v) Σ_w R(v)ᵀ`), measurement `h(x) = x/|x|`
+//!   with the detection noise's covariance `R(x) Σ_o R(x)ᵀ`, state renormalized after each step,
+//!   Joseph-form update. It is initialized at the first detection (`x = y`), the spin prior the
+//!   Gaussian matched to `(−3)³`; of the interpretations (and signs) the one with the smaller
+//!   Mahalanobis innovation; a dark frame is the nearest point of the dark observation's circle
+//!   with the tilt variance of `Bingham(0, −3.6, −3.6, 0)`. Variants, to see what matters:
+//!   `EKF-2 no dark` (dark frames skipped), `EKF-2 dark Gaussian` (a dark frame is `y_dark` with
+//!   the Gaussian matched to the dark noise, the paper's moment mapping taken literally),
+//!   `EKF-2 reported y` (the detection's interpretation as reported, not chosen).
 //!
 //! **An inherent ambiguity.** For side-spin (about the line of sight) with the logo facing the
 //! camera, the flip `f` is nearly a half turn about the line of sight, so the spins `θ` and
@@ -76,24 +76,24 @@
 //! `$CARGO_TARGET_DIR`, else `target/`) for `scripts/plot_spin.py` (`docs/spin_tracking.svg`).
 //! Figures and the comparison with the paper: `docs/accuracy.md`.
 
+mod glover_common;
+// the second-order EKF ("EKF-2"), in its own file; it uses this file's observation model, so
+// only this test includes it
+#[path = "glover_common/ekf2.rs"]
+mod ekf2;
+
 use bingham::filter::{BinghamFilter, SpinFilter};
 use bingham::quaternion::q4;
 use bingham::Bingham;
-use nalgebra::{Matrix4, SMatrix, SVector, Vector4};
+use ekf2::{Dark, Ekf2, EkfNoise};
+use glover_common::{angle, draw, lmat, m_with_mode, mul, normalized, rmat, I4, Q};
+use nalgebra::Vector4;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-type Q = [f64; 4];
-type M8 = SMatrix<f64, 8, 8>;
-type V8 = SVector<f64, 8>;
-type M48 = SMatrix<f64, 4, 8>;
-
-const I4: [f64; 16] = [
-    1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
-];
 const IDENTITY: Q = [1.0, 0.0, 0.0, 0.0];
 const FRAMES: usize = 40;
 const PER_TYPE: usize = 20;
@@ -157,59 +157,7 @@ const EKF2_DARK_GAUSSIAN: usize = 6;
 const EKF2_REPORTED: usize = 7;
 
 // ---------------------------------------------------------------------------------------------
-// quaternion helpers
-
-fn mul(a: &Q, b: &Q) -> Q {
-    q4::mul(a, b)
-}
-
-fn normalized(q: &Q) -> Q {
-    let n = q.iter().map(|a| a * a).sum::<f64>().sqrt();
-    [q[0] / n, q[1] / n, q[2] / n, q[3] / n]
-}
-
-fn dot(a: &Q, b: &Q) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// The rotation angle between two unit quaternions (of `a⁻¹ ∘ b`), in `[0, π]`.
-fn angle(a: &Q, b: &Q) -> f64 {
-    2.0 * dot(a, b).abs().min(1.0).acos()
-}
-
-/// `L(q)`: `q ∘ r = L(q) r`.
-fn lmat(q: &Q) -> Matrix4<f64> {
-    let [w, x, y, z] = *q;
-    Matrix4::new(w, -x, -y, -z, x, w, -z, y, y, z, w, -x, z, -y, x, w)
-}
-
-/// `R(q)`: `p ∘ q = R(q) p`.
-fn rmat(q: &Q) -> Matrix4<f64> {
-    let [w, x, y, z] = *q;
-    Matrix4::new(w, -x, -y, -z, x, w, z, -y, y, -z, w, x, z, y, -x, w)
-}
-
-fn to_q(v: &Vector4<f64>) -> Q {
-    [v[0], v[1], v[2], v[3]]
-}
-
-/// `M` with the mode `q` last: columns `q ∘ e_1, q ∘ e_2, q ∘ e_3, q` (as in `tests/spin.rs`).
-fn m_with_mode(q: &Q) -> Vec<f64> {
-    let l = lmat(q);
-    let cols = [1usize, 2, 3, 0];
-    let mut m = vec![0.0; 16];
-    for (j, &c) in cols.iter().enumerate() {
-        for i in 0..4 {
-            m[i * 4 + j] = l[(i, c)];
-        }
-    }
-    m
-}
-
-fn draw(b: &Bingham, rng: &mut StdRng) -> Q {
-    let s = &b.sample(rng, 1)[0];
-    normalized(&[s[0], s[1], s[2], s[3]])
-}
+// the logo and the spin types
 
 fn logo_faces_camera(x: &Q) -> bool {
     let d = q4::rotate(x, &LOGO);
@@ -399,236 +347,6 @@ impl Qbf1 {
     fn spin_mode(&self) -> Q {
         let m = self.f.mode();
         [m[0], m[1], m[2], m[3]]
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// the second-order EKF (LaViola 2003, discrete time, as Glover & Kaelbling adapted it)
-
-/// Gaussian noise covariances (in R⁴, about the mean of the hemisphere `q₀ ≥ 0`) matched to the
-/// Bingham noises by sampling, and the spin prior's.
-struct EkfNoise {
-    process: Matrix4<f64>,
-    detect: Matrix4<f64>,
-    dark: Matrix4<f64>,
-    dark_gaussian: Matrix4<f64>,
-    spin_prior: Matrix4<f64>,
-    spin_prior_mean: Q,
-}
-
-/// Mean and covariance of samples of `b` flipped to the hemisphere `q₀ ≥ 0`.
-fn hemisphere_moments(b: &Bingham, rng: &mut StdRng, n: usize) -> (Vector4<f64>, Matrix4<f64>) {
-    let xs: Vec<Vector4<f64>> = b
-        .sample(rng, n)
-        .iter()
-        .map(|s| {
-            let v = Vector4::new(s[0], s[1], s[2], s[3]);
-            if v[0] < 0.0 {
-                -v
-            } else {
-                v
-            }
-        })
-        .collect();
-    let mean = xs.iter().fold(Vector4::zeros(), |a, x| a + x) / n as f64;
-    let cov = xs.iter().fold(Matrix4::zeros(), |a, x| {
-        a + (x - mean) * (x - mean).transpose()
-    }) / (n - 1) as f64;
-    (mean, cov)
-}
-
-impl EkfNoise {
-    fn new() -> EkfNoise {
-        let mut rng = StdRng::seed_from_u64(SEED + 77);
-        let b = |z: &[f64; 4]| Bingham::from_row_major(4, &I4, z).unwrap();
-        let (_, process) = hemisphere_moments(&b(&Z_PROCESS), &mut rng, 20_000);
-        let (_, detect) = hemisphere_moments(&b(&Z_DETECT), &mut rng, 20_000);
-        let prior = Bingham::from_row_major(4, &m_with_mode(&IDENTITY), &Z_SPIN_PRIOR).unwrap();
-        let (mean, spin_prior) = hemisphere_moments(&prior, &mut rng, 20_000);
-        // the dark observation: the tilt variance of Bingham(0, −3.6, −3.6, 0) about the two image
-        // axes; along the circle (k) the nearest point is used, so no information (variance 1)
-        let s = b(&Z_DARK).second_moment().unwrap();
-        let dark = Matrix4::from_diagonal(&Vector4::new(1e-4, s[(1, 1)], s[(2, 2)], 1.0));
-        let (_, dark_gaussian) = hemisphere_moments(&b(&Z_DARK), &mut rng, 20_000);
-        EkfNoise {
-            process,
-            detect,
-            dark,
-            dark_gaussian,
-            spin_prior,
-            spin_prior_mean: normalized(&to_q(&mean)),
-        }
-    }
-}
-
-/// What the EKF makes of a dark frame.
-#[derive(Clone, Copy, PartialEq)]
-enum Dark {
-    /// the nearest point of the dark observation's circle, with the tilt variance
-    Nearest,
-    /// skipped
-    Skip,
-    /// `y_dark` with the Gaussian matched to `Bingham(0, −3.6, −3.6, 0)` (sampled)
-    Gaussian,
-}
-
-struct Ekf2 {
-    s: V8,
-    p: M8,
-    on: bool,
-    dark: Dark,
-    /// of a detection's interpretations the likelier (else the one reported)
-    choose: bool,
-}
-
-impl Ekf2 {
-    fn new(dark: Dark, choose: bool, n: &EkfNoise) -> Ekf2 {
-        let mut p = M8::zeros();
-        p.fixed_view_mut::<4, 4>(4, 4).copy_from(&n.spin_prior);
-        let mut s = V8::zeros();
-        s[0] = 1.0;
-        s[4] = 1.0;
-        Ekf2 {
-            s,
-            p,
-            on: false,
-            dark,
-            choose,
-        }
-    }
-
-    fn x(&self) -> Q {
-        [self.s[0], self.s[1], self.s[2], self.s[3]]
-    }
-
-    fn v(&self) -> Q {
-        [self.s[4], self.s[5], self.s[6], self.s[7]]
-    }
-
-    fn set(&mut self, x: &Q, v: &Q) {
-        self.s.fixed_rows_mut::<4>(0).copy_from_slice(x);
-        self.s.fixed_rows_mut::<4>(4).copy_from_slice(v);
-    }
-
-    fn renormalize(&mut self) {
-        self.set(&normalized(&self.x()), &normalized(&self.v()));
-    }
-
-    fn predict(&mut self, n: &EkfNoise) {
-        let (x, v) = (self.x(), self.v());
-        let xn = mul(&v, &x);
-        let mut f = M8::identity();
-        f.fixed_view_mut::<4, 4>(0, 0).copy_from(&lmat(&v));
-        f.fixed_view_mut::<4, 4>(0, 4).copy_from(&rmat(&x));
-        let mut q = M8::identity() * 1e-8;
-        let rv = rmat(&v);
-        q.fixed_view_mut::<4, 4>(4, 4)
-            .copy_from(&(rv * n.process * rv.transpose()));
-        self.p = f * self.p * f.transpose() + q;
-        self.set(&normalized(&xn), &normalized(&v));
-    }
-
-    /// The innovation, its covariance, the measurement Jacobian and noise for observing
-    /// `y` (sign-aligned with the state) with the noise covariance `sigma` (noise frame).
-    fn innovation(
-        &self,
-        y: &Q,
-        sigma: &Matrix4<f64>,
-    ) -> (Vector4<f64>, Matrix4<f64>, M48, Matrix4<f64>) {
-        let x = self.x();
-        let xv = Vector4::from_column_slice(&x);
-        let sign = if dot(y, &x) < 0.0 { -1.0 } else { 1.0 };
-        let r = Vector4::from_column_slice(y) * sign - xv;
-        let mut h = M48::zeros();
-        h.fixed_view_mut::<4, 4>(0, 0)
-            .copy_from(&(Matrix4::identity() - xv * xv.transpose()));
-        let rx = rmat(&x);
-        let noise = rx * sigma * rx.transpose();
-        let s = h * self.p * h.transpose() + noise;
-        (r, s, h, noise)
-    }
-
-    fn mahalanobis(&self, y: &Q, sigma: &Matrix4<f64>) -> f64 {
-        let (r, s, _, _) = self.innovation(y, sigma);
-        let si = s.try_inverse().expect("innovation covariance");
-        (r.transpose() * si * r)[(0, 0)]
-    }
-
-    fn update(&mut self, y: &Q, sigma: &Matrix4<f64>) {
-        let (r, s, h, noise) = self.innovation(y, sigma);
-        let si = s.try_inverse().expect("innovation covariance");
-        let k = self.p * h.transpose() * si;
-        let ikh = M8::identity() - k * h;
-        self.s += k * r;
-        self.p = ikh * self.p * ikh.transpose() + k * noise * k.transpose();
-        self.p = 0.5 * (self.p + self.p.transpose());
-        self.renormalize();
-    }
-
-    fn frame(&mut self, obs: &Obs, n: &EkfNoise) {
-        if self.on {
-            self.predict(n);
-        }
-        match obs {
-            Obs::Logo(y) if !self.on => {
-                let r = rmat(y);
-                self.p
-                    .fixed_view_mut::<4, 4>(0, 0)
-                    .copy_from(&(r * n.detect * r.transpose()));
-                self.set(y, &n.spin_prior_mean);
-                self.on = true;
-            }
-            Obs::Logo(y) => {
-                let y2 = mul(y, &FLIP);
-                let pick = if !self.choose
-                    || self.mahalanobis(y, &n.detect) <= self.mahalanobis(&y2, &n.detect)
-                {
-                    *y
-                } else {
-                    y2
-                };
-                self.update(&pick, &n.detect);
-            }
-            Obs::Dark if self.on && self.dark == Dark::Gaussian => {
-                self.update(&Y_DARK, &n.dark_gaussian);
-            }
-            Obs::Dark if self.on && self.dark == Dark::Nearest => {
-                // the nearest point of the circle {R_z(α) ∘ y_dark}
-                let x = self.x();
-                let a = Y_DARK;
-                let b = mul(&[0.0, 0.0, 0.0, 1.0], &Y_DARK);
-                let (ca, cb) = (dot(&a, &x), dot(&b, &x));
-                let p = normalized(&[
-                    ca * a[0] + cb * b[0],
-                    ca * a[1] + cb * b[1],
-                    ca * a[2] + cb * b[2],
-                    ca * a[3] + cb * b[3],
-                ]);
-                self.update(&p, &n.dark);
-            }
-            Obs::Dark => {}
-        }
-    }
-
-    /// The type whose mean spin is nearest in the Mahalanobis distance of the spin's Gaussian
-    /// (in the tangent space at the estimate; the type's sign aligned).
-    fn classify(&self, means: &[Q]) -> usize {
-        let v = self.v();
-        let vv = Vector4::from_column_slice(&v);
-        let proj = Matrix4::identity() - vv * vv.transpose();
-        let pv = self.p.fixed_view::<4, 4>(4, 4).into_owned();
-        let pt = proj * pv * proj + vv * vv.transpose();
-        let pi = pt.try_inverse().expect("spin covariance");
-        let mut best = (f64::INFINITY, 0);
-        for (k, m) in means.iter().enumerate() {
-            let sign = if dot(m, &v) < 0.0 { -1.0 } else { 1.0 };
-            let r = proj * (Vector4::from_column_slice(m) * sign - vv);
-            let d = (r.transpose() * pi * r)[(0, 0)];
-            if d < best.0 {
-                best = (d, k);
-            }
-        }
-        best.1
     }
 }
 

@@ -62,9 +62,12 @@
 //! Run: `cargo test --release --test glover_table1 -- --nocapture`
 //! (variants: `BINGHAM_TABLE1_VARIANTS=1 cargo test --release --test glover_table1 -- --nocapture`).
 
+mod glover_common;
+
 use bingham::filter::BinghamFilter;
 use bingham::quaternion::{left_matrix, q4, right_matrix};
 use bingham::Bingham;
+use glover_common::{angle, lmat, rmat, to_q, I4};
 use nalgebra::{Matrix4, Vector4};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -95,41 +98,8 @@ const PAPER: [(f64, f64); 9] = [
     (0.47, 0.27),
 ];
 
-const I4: [f64; 16] = [
-    1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
-];
-
 // ---------------------------------------------------------------------------------------------
-// Quaternion matrices and the nominal trajectory
-
-/// `L(q)`: `q ∘ x = L(q) x`.
-fn lmat(q: &[f64; 4]) -> Matrix4<f64> {
-    Matrix4::new(
-        q[0], -q[1], -q[2], -q[3], //
-        q[1], q[0], -q[3], q[2], //
-        q[2], q[3], q[0], -q[1], //
-        q[3], -q[2], q[1], q[0],
-    )
-}
-
-/// `R(q)`: `x ∘ q = R(q) x`.
-fn rmat(q: &[f64; 4]) -> Matrix4<f64> {
-    Matrix4::new(
-        q[0], -q[1], -q[2], -q[3], //
-        q[1], q[0], q[3], -q[2], //
-        q[2], -q[3], q[0], q[1], //
-        q[3], q[2], -q[1], q[0],
-    )
-}
-
-fn arr(v: &Vector4<f64>) -> [f64; 4] {
-    [v[0], v[1], v[2], v[3]]
-}
-
-fn angle(a: &[f64], b: &[f64; 4]) -> f64 {
-    let d: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
-    2.0 * d.abs().min(1.0).acos()
-}
+// The nominal trajectory
 
 /// `qz(yaw) ∘ qy(pitch) ∘ qx(roll)`.
 fn euler(yaw: f64, pitch: f64, roll: f64) -> [f64; 4] {
@@ -356,7 +326,7 @@ impl Ekf {
         let f = lmat(u);
         self.x = f * self.x;
         let g = if self.rotated {
-            rmat(&arr(&self.x))
+            rmat(&to_q(&self.x))
         } else {
             Matrix4::identity()
         };
@@ -373,7 +343,7 @@ impl Ekf {
         }
         let jac = (Matrix4::identity() - h * h.transpose()) / n;
         let g = if self.rotated {
-            rmat(&arr(&h))
+            rmat(&to_q(&h))
         } else {
             Matrix4::identity()
         };
@@ -562,7 +532,7 @@ fn print_motion(settings: &[(String, Vec<Run>)]) {
 // ---------------------------------------------------------------------------------------------
 // Tests
 
-/// The helpers agree with the library's quaternion matrices.
+/// The shared helpers (`tests/glover_common`) agree with the library's quaternion matrices.
 #[test]
 fn quaternion_matrices_match_the_library() {
     let mut rng = StdRng::seed_from_u64(SEED);
