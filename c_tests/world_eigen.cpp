@@ -295,15 +295,14 @@ static void test_predict_world_sampled() {
         CHECK_OK(bingham_sample(d, mr.data(), state.z.data(), seed++, n, xs.data()));
         CHECK_OK(bingham_sample(d, mwr.data(), noises[k].z.data(), seed++, n, ws.data()));
         Eigen::Quaterniond qu(u(0), u(1), u(2), u(3));
-        MatrixXd sum = MatrixXd::Zero(d, d), sum2 = MatrixXd::Zero(d, d), body = MatrixXd::Zero(d, d);
+        // fixed-size types: no heap allocation per sample (this loop runs under ASan and valgrind)
+        Eigen::Matrix4d sum = Eigen::Matrix4d::Zero(), sum2 = Eigen::Matrix4d::Zero(), body = Eigen::Matrix4d::Zero();
         for (size_t i = 0; i < n; ++i) {
             const double *x = &xs[i * d], *w = &ws[i * d];
             Eigen::Quaterniond qx(x[0], x[1], x[2], x[3]), qw(w[0], w[1], w[2], w[3]);
             Eigen::Quaterniond q = qw * qu * qx, qb = qx * qu * qw;
-            VectorXd y(4), yb(4);
-            y << q.w(), q.x(), q.y(), q.z();
-            yb << qb.w(), qb.x(), qb.y(), qb.z();
-            MatrixXd yy = y * y.transpose();
+            const Eigen::Vector4d y(q.w(), q.x(), q.y(), q.z()), yb(qb.w(), qb.x(), qb.y(), qb.z());
+            const Eigen::Matrix4d yy = y * y.transpose();
             sum += yy;
             sum2 += yy.cwiseProduct(yy);
             body += yb * yb.transpose();
