@@ -127,13 +127,14 @@ python-test: venv
 	cd python/tests && env -u BINGHAM_LIB $(VENV_PYTHON) -m pytest -q -p no:cacheprovider
 
 # The Python package in a virtual environment ($(TARGET_DIR)/venv), for python-test, demo and
-# broad: `pip install ./python` builds the library with cargo (setuptools-rust, which pip fetches
-# for the build) and ships it inside the package. --system-site-packages reuses NumPy, pytest,
-# vqf and ahrs of the system Python (`make deps`). Reinstalled on every run (cargo rebuilds only
-# what changed).
-venv:
+# broad: `pip install ./python` with BINGHAM_PREBUILT_LIB ships the libbingham.so that `build`
+# made (debug info stripped) instead of compiling the crate again through setuptools-rust, so
+# one build serves the C library and the Python package. --system-site-packages reuses NumPy,
+# pytest, vqf and ahrs of the system Python (`make deps`). Reinstalled on every run.
+venv: build
 	@test -x $(VENV_PYTHON) || $(PYTHON) -m venv --system-site-packages $(VENV)
-	$(VENV_PYTHON) -m pip install --disable-pip-version-check --progress-bar off ./python
+	BINGHAM_PREBUILT_LIB=$(abspath $(RELEASE)/libbingham.so) \
+	  $(VENV_PYTHON) -m pip install --disable-pip-version-check --progress-bar off ./python
 	@$(VENV_PYTHON) -c 'import bingham; print("bingham", bingham.__version__, "loads", bingham.library_path())'
 
 # Installs into a temporary prefix and builds/runs a C++11 program against it via pkg-config.
