@@ -17,7 +17,8 @@
 //!
 //! Approximations: the product of marginals, and the three moment matchings (each keeps the
 //! exact second moment of the composition it replaces). Derivation and measurements:
-//! `docs/design.md` (§ "World-frame steps and the spin filter"), `docs/accuracy.md` (§ "Spin").
+//! `docs/design.md` (§ "World-frame steps and the spin filter"), `docs/accuracy.md`
+//! (§ "Glover & Kaelbling reproduced").
 
 use nalgebra::Const;
 
