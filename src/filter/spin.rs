@@ -247,11 +247,14 @@ impl SpinFilter {
             }
             None => (self.v, self.warm.evidence.clone()),
         };
-        let mv = match u {
-            Some(u) => left(Const::<4>, u.as_slice()) * v_post.m,
-            None => v_post.m,
+        let lu = u.map(|u| left(Const::<4>, u.as_slice()));
+        let a_post = match (&obs, lu) {
+            // the spin unchanged by an observation: its moment is known, `L(u) A_v L(u)ᵀ`
+            (None, Some(l)) => l * av * l.transpose(),
+            (None, None) => av,
+            (Some(_), Some(l)) => composed_moment(&(l * v_post.m), &v_post.z)?,
+            (Some(_), None) => composed_moment(&v_post.m, &v_post.z)?,
         };
-        let a_post = composed_moment(&mv, &v_post.z)?;
         let (mvn, zvn, warm_v) = fit_second_moment(
             &compose_moments(&w_moment, &a_post),
             self.warm.spin.as_ref(),
