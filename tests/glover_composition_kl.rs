@@ -205,29 +205,13 @@ impl Integrals {
     }
 }
 
-/// Gauss–Legendre nodes and weights on `[a, b]` (Newton on the Legendre recurrence).
+/// Gauss–Legendre nodes and weights on `[a, b]`: `testkit::gauss_legendre`'s rule on
+/// `[−1, 1]`, mapped.
 fn gauss_legendre(n: usize, a: f64, b: f64) -> Vec<(f64, f64)> {
-    (0..n)
-        .map(|i| {
-            let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 0.0;
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, x);
-                for k in 2..=n {
-                    let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
-                let dx = p1 / dp;
-                x -= dx;
-                if dx.abs() < 1e-16 {
-                    break;
-                }
-            }
-            let w = 2.0 / ((1.0 - x * x) * dp * dp);
-            (0.5 * (a + b) + 0.5 * (b - a) * x, 0.5 * (b - a) * w)
-        })
+    let (x, w) = testkit::gauss_legendre(n);
+    x.iter()
+        .zip(&w)
+        .map(|(x, w)| (0.5 * (a + b) + 0.5 * (b - a) * x, 0.5 * (b - a) * w))
         .collect()
 }
 
