@@ -166,6 +166,22 @@
 #define BINGHAM_AHRS_LATENCY_ESTIMATE -1.0
 
 /**
+ * The time constant (s) of the health averages: long enough that one burst of linear
+ * acceleration (a fraction of a second) or a short magnetic disturbance does not raise the
+ * score past the threshold, short enough to flag a wrong input within seconds of motion.
+ */
+#define BINGHAM_AHRS_HEALTH_TIME 5.0
+
+/**
+ * The score above which the readout flags the input as inconsistent with the model:
+ * the average normalized innovation is this many times what the model predicts. Measured
+ * (tests/ahrs_health.rs, docs/accuracy.md § "AHRS health"): correct input stays below it
+ * on the simulated suite and the BROAD recordings; each of the input mistakes the test makes
+ * exceeds it within 10 s of motion.
+ */
+#define BINGHAM_AHRS_HEALTH_THRESHOLD 10.0
+
+/**
  * The result of every fallible `bingham_*` function.
  *
  * `BINGHAM_OK` (0) means success; every other value is an error, and then the function has
@@ -532,6 +548,58 @@ typedef struct bingham_ahrs_params {
      */
     double gyro_scale_noise;
 } bingham_ahrs_params;
+
+/**
+ * The AHRS's health readout (`bingham_ahrs_health_report` in C): see the module `ahrs::health` for
+ * the definitions. All values finite; before the first correction all zero.
+ */
+typedef struct bingham_ahrs_health_report {
+    /**
+     * The larger of the tilt and heading scores: about 1 when the sensors agree with the
+     * model; above `HEALTH_THRESHOLD` (10) the input is likely wrong (a gyroscope in °/s, a
+     * wrong sample time, swapped magnetometer axes).
+     */
+    double score;
+    /**
+     * The squared deviation of the low-passed accelerometer's norm from `gravity`, in units
+     * of `acc_reject`, averaged over `HEALTH_TIME` (5 s).
+     */
+    double gravity_score;
+    /**
+     * The normalized tilt innovation per degree of freedom, averaged over `HEALTH_TIME` (5 s).
+     */
+    double tilt_score;
+    /**
+     * The normalized heading innovation, averaged over `HEALTH_TIME` (5 s) of corrections
+     * with a heading observation (0 without one).
+     */
+    double heading_score;
+    /**
+     * The angle (rad) between the predicted and the low-passed accelerometer's "up" at the
+     * last correction.
+     */
+    double tilt_innovation;
+    /**
+     * The heading error (rad, about the world vertical) of the averaged field at the last
+     * correction with a heading observation (0 without one).
+     */
+    double heading_innovation;
+    /**
+     * The fraction (0 to 1) of magnetometer samples the disturbance test refused, averaged
+     * over `HEALTH_TIME` (5 s) of samples that carried a field (0 without any).
+     */
+    double mag_rejected;
+    /**
+     * The dip of the reference field (rad), positive when the field points below the
+     * horizon (north of the magnetic equator); 0 without a reference (`has_mag_reference`
+     * = 0). Of the wrong sign for the place: a flipped accelerometer (or magnetometer).
+     */
+    double mag_dip;
+    /**
+     * 1 when a magnetic reference exists (a field has been seen), else 0.
+     */
+    int32_t has_mag_reference;
+} bingham_ahrs_health_report;
 
 #ifdef __cplusplus
 extern "C" {
@@ -1303,6 +1371,53 @@ enum bingham_status bingham_filter_log_likelihood(const struct bingham_filter *f
                                                   double *out);
 
 /**
+ * The surprise of a measurement under the current state, a health readout on a fixed scale:
+ * `s = 2 (log p(y_hat) - log p(measurement)) >= 0`, `p` the predictive density of
+ * `bingham_filter_log_likelihood()` and `y_hat = x_hat (+) v_hat` the predicted measurement
+ * (the modes of the state and the noise). When the state and the noise are concentrated and
+ * the model holds, `s` is a chi-square variable with d - 1 degrees of freedom: mean 3 for
+ * quaternions, above 16.27 with probability 0.1 % (d = 2: mean 1, above 10.83 with 0.1 %). A
+ * measurement that does not fit — a quaternion in (x, y, z, w) order, a fix in another frame
+ * — scores in the hundreds. Broad directions of the state or noise contribute little. The
+ * filter is not changed. Use it to monitor a stream of fixes, or gate with
+ * `bingham_filter_update_gated()`.
+ *
+ * Errors: as `bingham_filter_log_likelihood()`. On error `*surprise` is not written.
+ *
+ * # Safety
+ * `f`: a live handle; `measurement`: d, `m_v`: d*d and `z_v`: d readable doubles;
+ * `surprise`: one writable double.
+ */
+enum bingham_status bingham_filter_surprise(const struct bingham_filter *f,
+                                            const double *measurement,
+                                            const double *m_v,
+                                            const double *z_v,
+                                            double *surprise);
+
+/**
+ * The update with a likelihood gate: `bingham_filter_update()` if the measurement's surprise
+ * (`bingham_filter_surprise()`) is at most `max_surprise`, otherwise the filter is left as it
+ * was. Writes the surprise into `*surprise` and 1 (applied) or 0 (gated out) into `*accepted`;
+ * a gated-out measurement returns `BINGHAM_OK`. `max_surprise`: >= 0, or `INFINITY` (no gate);
+ * e.g. 16.27 rejects 0.1 % of the measurements of a correct quaternion model.
+ *
+ * Errors: those of `bingham_filter_update()`, `BINGHAM_ERR_NULL_ARGUMENT` (`surprise`,
+ * `accepted`), `BINGHAM_ERR_INVALID_ARGUMENT` (`max_surprise` NaN or negative). On error
+ * nothing is written and the filter is unchanged.
+ *
+ * # Safety
+ * `f`: a live handle; `measurement`: d, `m_v`: d*d and `z_v`: d readable doubles;
+ * `surprise`: one writable double; `accepted`: one writable `int32_t`.
+ */
+enum bingham_status bingham_filter_update_gated(struct bingham_filter *f,
+                                                const double *measurement,
+                                                const double *m_v,
+                                                const double *z_v,
+                                                double max_surprise,
+                                                double *surprise,
+                                                int32_t *accepted);
+
+/**
  * Measurement update with a measured direction (d = 4 filters): `body` (sensor frame) is a
  * noisy measurement of the known world direction `reference`, with von Mises–Fisher noise of
  * concentration `kappa` (see `bingham_vector_observation()`; the filter's quaternion maps
@@ -1716,6 +1831,24 @@ enum bingham_status bingham_ahrs_update_batch_spread(struct bingham_ahrs *a,
                                                      double *spread);
 
 /**
+ * As `bingham_ahrs_update_batch_spread()`, also writing the health score
+ * (`bingham_ahrs_health()`'s `score`: about 1 when the sensors agree with the model, above
+ * `BINGHAM_AHRS_HEALTH_THRESHOLD` an input mistake is likely) after each sample into
+ * `health` (n doubles, or `NULL`).
+ *
+ * # Safety
+ * As `bingham_ahrs_update_batch_spread()`; `health`: `NULL` or n writable doubles.
+ */
+enum bingham_status bingham_ahrs_update_batch_health(struct bingham_ahrs *a,
+                                                     size_t n,
+                                                     const double *gyr,
+                                                     const double *acc,
+                                                     const double *mag,
+                                                     double *quat,
+                                                     double *spread,
+                                                     double *health);
+
+/**
  * The current orientation estimate (the mode of the Bingham state): sensor → world (ENU),
  * scalar first `(w, x, y, z)`, with w ≥ 0. Before the first sample: the identity.
  *
@@ -1772,6 +1905,25 @@ enum bingham_status bingham_ahrs_set_state(struct bingham_ahrs *a,
  * `a`: a live handle; `spread`: 4 writable doubles.
  */
 enum bingham_status bingham_ahrs_angular_spread(const struct bingham_ahrs *a, double *spread);
+
+/**
+ * The health readout: how well the sensors have agreed with the model over the last
+ * `BINGHAM_AHRS_HEALTH_TIME` (5 s). `score` is about 1 when they agree; above
+ * `BINGHAM_AHRS_HEALTH_THRESHOLD` (10) the input is likely wrong — a gyroscope in °/s instead
+ * of rad/s, a wrong `sample_time`, swapped or mirrored magnetometer axes. `mag_rejected`
+ * near 1 for long: the magnetometer is disturbed or its axes are wrong. `mag_dip` of the
+ * wrong sign for the place (negative north of the magnetic equator): the accelerometer's
+ * (or magnetometer's) sign is flipped, which no other signal shows. Definitions in
+ * docs/guide.md ("Health readout"). All zero before the first correction (20 ms after the
+ * first sample).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `out`). On error `*out` is not written.
+ *
+ * # Safety
+ * `a`: a live handle; `out`: a writable `bingham_ahrs_health_report`.
+ */
+enum bingham_status bingham_ahrs_health(const struct bingham_ahrs *a,
+                                        struct bingham_ahrs_health_report *out);
 
 /**
  * The gyroscope bias estimate (rad/s, sensor frame), subtracted from the rates.

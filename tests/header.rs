@@ -1,5 +1,5 @@
 //! The committed `include/bingham.h` must be exactly what cbindgen generates from `src/ffi/`
-//! (and the `#[repr(C)]` parameter struct of `src/ahrs/params.rs`).
+//! (and the `#[repr(C)]` structs of `src/ahrs/params.rs` and `src/ahrs/health.rs`).
 //!
 //! On drift this test fails; regenerate with `make header` (which runs this test with
 //! `BINGHAM_WRITE_HEADER=1`, writing the file instead of comparing) and commit the result.
@@ -16,6 +16,7 @@ fn generate() -> String {
         // the AHRS parameters are a plain `#[repr(C)]` struct of the core, shared with C
         // (renamed `bingham_ahrs_params` by cbindgen.toml) instead of a mirrored copy
         .with_src(root.join("src/ahrs/params.rs"))
+        .with_src(root.join("src/ahrs/health.rs"))
         .generate()
         .expect("cbindgen failed to generate the header");
     let mut out = Vec::new();

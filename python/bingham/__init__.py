@@ -53,7 +53,7 @@ from ._library import (
     library_path,
     version,
 )
-from .ahrs import LATENCY_ESTIMATE, Ahrs, AhrsParams
+from .ahrs import HEALTH_THRESHOLD, HEALTH_TIME, LATENCY_ESTIMATE, Ahrs, AhrsHealth, AhrsParams
 from .distribution import (
     angular_spread,
     compose,

@@ -13,11 +13,47 @@ from ._arrays import Array, ArrayLike, _in, _ptr
 from .errors import Status, _check, last_error_message
 from ._library import lib
 
-__all__ = ["AhrsParams", "Ahrs", "LATENCY_ESTIMATE"]
+__all__ = ["AhrsParams", "AhrsHealth", "Ahrs", "LATENCY_ESTIMATE", "HEALTH_THRESHOLD", "HEALTH_TIME"]
 
 #: ``mag_latency`` value (the default) that compensates the AHRS's online estimate of the
 #: magnetometer's latency (``BINGHAM_AHRS_LATENCY_ESTIMATE`` in C).
 LATENCY_ESTIMATE = -1.0
+
+#: The health score above which the input is likely wrong (``BINGHAM_AHRS_HEALTH_THRESHOLD``):
+#: see :meth:`Ahrs.health`.
+HEALTH_THRESHOLD = 10.0
+
+#: The time constant (s) of the health averages (``BINGHAM_AHRS_HEALTH_TIME``).
+HEALTH_TIME = 5.0
+
+
+class AhrsHealth(ctypes.Structure):
+    """``bingham_ahrs_health_report``, the AHRS's health readout (see :meth:`Ahrs.health`).
+
+    ``score``: the larger of ``tilt_score`` and ``heading_score``, about 1 when the sensors
+    agree with the model, above :data:`HEALTH_THRESHOLD` (10) an input mistake is likely (a
+    gyroscope in °/s, a wrong sample time, swapped magnetometer axes); ``tilt_innovation`` and
+    ``heading_innovation`` (rad) at the last correction; ``mag_rejected`` the fraction of
+    magnetometer samples refused as disturbed over the last :data:`HEALTH_TIME` seconds;
+    ``mag_dip`` (rad, positive below the horizon) the reference field's dip, valid when
+    ``has_mag_reference`` is 1 — of the wrong sign for the place (negative north of the
+    magnetic equator), the accelerometer's sign is flipped."""
+
+    _fields_ = [
+        ("score", ctypes.c_double),
+        ("gravity_score", ctypes.c_double),
+        ("tilt_score", ctypes.c_double),
+        ("heading_score", ctypes.c_double),
+        ("tilt_innovation", ctypes.c_double),
+        ("heading_innovation", ctypes.c_double),
+        ("mag_rejected", ctypes.c_double),
+        ("mag_dip", ctypes.c_double),
+        ("has_mag_reference", ctypes.c_int32),
+    ]
+
+    def __repr__(self) -> str:
+        body = ", ".join(f"{name}={getattr(self, name)!r}" for name, _ in self._fields_)
+        return f"AhrsHealth({body})"
 
 
 class AhrsParams(ctypes.Structure):
@@ -220,11 +256,17 @@ class Ahrs:
         _check(lib().bingham_ahrs_update(self._h(), _ptr(g), _ptr(a), _ptr(m)))
 
     def update_batch(
-        self, gyr: ArrayLike, acc: ArrayLike, mag: Optional[ArrayLike] = None, spread: bool = False
-    ) -> Union[Array, Tuple[Array, Array]]:
+        self,
+        gyr: ArrayLike,
+        acc: ArrayLike,
+        mag: Optional[ArrayLike] = None,
+        spread: bool = False,
+        health: bool = False,
+    ) -> Union[Array, Tuple[Array, ...]]:
         """n samples (n×3 arrays; ``mag`` n×3 or None). Returns the n×4 quaternions after each
-        sample, or ``(quat, spread)`` with the total angular spread (radians, length n) when
-        ``spread`` is true. Per channel, as in :meth:`update`: a row of ``acc`` or ``mag``
+        sample, or a tuple ``(quat, spread)``, ``(quat, health)`` or ``(quat, spread, health)``
+        with the total angular spread (radians, length n) when ``spread`` is true and the health
+        score (:meth:`health`'s ``score``, length n) when ``health`` is true. Per channel, as in :meth:`update`: a row of ``acc`` or ``mag``
         holding NaN means "no sample" of that sensor at that time (fill the rows of a slower or
         gappy sensor with NaN); every row of ``gyr`` must be finite. A refused sample raises
         :class:`BinghamError` (its message names the sample, "sample k: ..."); the samples
@@ -235,14 +277,22 @@ class Ahrs:
         m = None if mag is None else _rows3(mag, "mag", n)
         q = np.empty((n, 4))
         s = np.empty(n) if spread else None
+        h = np.empty(n) if health else None
         _check(
-            lib().bingham_ahrs_update_batch_spread(
-                self._h(), n, _ptr(g), _ptr(a), _ptr(m), _ptr(q), _ptr(s)
+            lib().bingham_ahrs_update_batch_health(
+                self._h(), n, _ptr(g), _ptr(a), _ptr(m), _ptr(q), _ptr(s), _ptr(h)
             )
         )
-        if s is not None:
-            return q, s
-        return q
+        extra = tuple(x for x in (s, h) if x is not None)
+        return (q, *extra) if extra else q
+
+    def health(self) -> AhrsHealth:
+        """The health readout: how well the sensors have agreed with the model over the last
+        :data:`HEALTH_TIME` (5 s); ``score`` above :data:`HEALTH_THRESHOLD` flags a likely input
+        mistake (see :class:`AhrsHealth`; definitions in docs/guide.md, "Health readout")."""
+        out = AhrsHealth()
+        _check(lib().bingham_ahrs_health(self._h(), ctypes.byref(out)))
+        return out
 
     def quaternion(self) -> Array:
         """The estimate (w, x, y, z), sensor → world ENU, w ≥ 0."""

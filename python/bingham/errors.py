@@ -79,6 +79,8 @@ _PYTHON_NAMES: Dict[str, str] = {
     "bingham_ahrs_update": "Ahrs.update",
     "bingham_ahrs_update_batch": "Ahrs.update_batch",
     "bingham_ahrs_update_batch_spread": "Ahrs.update_batch",
+    "bingham_ahrs_update_batch_health": "Ahrs.update_batch",
+    "bingham_ahrs_health": "Ahrs.health",
     "bingham_ahrs_quaternion": "Ahrs.quaternion",
     "bingham_ahrs_state": "Ahrs.state",
     "bingham_ahrs_set_state": "Ahrs.set_state",

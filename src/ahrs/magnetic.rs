@@ -78,6 +78,11 @@ impl Magnetic {
         self.reference.is_some() && !self.disturbed
     }
 
+    /// The reference field's dip (rad above the horizon), if there is a reference.
+    pub(super) fn reference_dip(&self) -> Option<f64> {
+        self.reference.map(|(_, dip)| dip)
+    }
+
     /// Sets the reference from a field sample `m` seen with the body-frame "up" `up_b`.
     pub(super) fn start(&mut self, m: &[f64; 3], up_b: &[f64; 3]) {
         let (norm, dip) = norm_dip(m, up_b);

@@ -64,6 +64,7 @@ use crate::observation::observation_exponent;
 use crate::quaternion::q4;
 
 mod bias;
+mod health;
 mod latency;
 mod lowpass;
 mod magnetic;
@@ -71,6 +72,8 @@ mod params;
 mod vec3;
 
 use bias::{evidence_precision, noise_moment, pinv, precision, BiasState};
+use health::HealthState;
+pub use health::{AhrsHealth, HEALTH_THRESHOLD, HEALTH_TIME};
 use latency::{turn_forward, LatencyEstimator};
 pub use lowpass::CORRECTION_PERIOD;
 use lowpass::{Coeffs, InertialLowPass, REST_FILTER_TIME};
@@ -110,6 +113,8 @@ struct SampleState {
     since: u32,
     /// `omega(z)` of the Bingham state (cached for the next composition and the spread).
     omega: [f64; 4],
+    /// The running state of the health readout.
+    health: HealthState,
 }
 
 /// The AHRS. Create it with [`Ahrs::new`], feed it samples with [`Ahrs::update`] (or
@@ -147,6 +152,7 @@ impl Ahrs {
                 mag: Magnetic::new(),
                 since: 0,
                 omega: [0.25; 4],
+                health: HealthState::default(),
             },
             latency: LatencyEstimator::new(params.sample_time),
             samples: 0,
@@ -267,6 +273,13 @@ impl Ahrs {
             out[3] = total.sqrt();
         }
         Ok(())
+    }
+
+    /// The health readout (module `health`): how well the sensors agree with the model
+    /// over the last [`HEALTH_TIME`] seconds; `score` above [`HEALTH_THRESHOLD`] flags an
+    /// input mistake (units, period, axes). All zero before the first correction.
+    pub fn health(&self) -> AhrsHealth {
+        self.s.health.readout(self.s.mag.reference_dip())
     }
 
     /// The gyroscope bias estimate (rad/s, sensor frame).
@@ -460,13 +473,28 @@ impl Ahrs {
         acc: &[[f64; 3]],
         mag: Option<&[[f64; 3]]>,
         quat: &mut [[f64; 4]],
+        spread: Option<&mut [f64]>,
+    ) -> Result<()> {
+        self.update_batch_health(gyr, acc, mag, quat, spread, None)
+    }
+
+    /// [`Ahrs::update_batch`], also writing the health score ([`Ahrs::health`]`.score`) after
+    /// each sample into `health` if given (the same length).
+    pub fn update_batch_health(
+        &mut self,
+        gyr: &[[f64; 3]],
+        acc: &[[f64; 3]],
+        mag: Option<&[[f64; 3]]>,
+        quat: &mut [[f64; 4]],
         mut spread: Option<&mut [f64]>,
+        mut health: Option<&mut [f64]>,
     ) -> Result<()> {
         let n = gyr.len();
         let lengths_ok = acc.len() == n
             && quat.len() == n
             && mag.is_none_or(|m| m.len() == n)
-            && spread.as_ref().is_none_or(|s| s.len() == n);
+            && spread.as_ref().is_none_or(|s| s.len() == n)
+            && health.as_ref().is_none_or(|h| h.len() == n);
         if !lengths_ok {
             return Err(Error::InvalidDimension(
                 "batch arrays must all have the same number of samples".into(),
@@ -483,6 +511,9 @@ impl Ahrs {
                 None => self.update(&gyr[k], &acc[k], m).map_err(|e| prefix(e, k))?,
             }
             quat[k] = self.quaternion();
+            if let Some(h) = health.as_deref_mut() {
+                h[k] = self.s.health.readout(None).score;
+            }
         }
         Ok(())
     }
@@ -584,7 +615,9 @@ fn step(
     let mag_used = match mag {
         Some(m) => {
             let m = turn_forward(m, &w, c.mag_lead);
-            s.mag.observe(&core.mode4(), &m, rate, p, c)
+            let used = s.mag.observe(&core.mode4(), &m, rate, p, c);
+            s.health.mag_sample(used, dt);
+            used
         }
         None => false,
     };
@@ -612,11 +645,15 @@ fn correct(p: &AhrsParams, c: &Coeffs, core: &mut Core<4>, s: &mut SampleState) 
     let mut evidence = Matrix4::zeros();
     let mut observed = false;
     let an = norm3(&s.acc_filter.y);
+    let mut tilt = None;
     if an >= 0.25 * p.gravity && an.is_finite() {
         let excess = (an - p.gravity) / p.acc_reject;
-        let kappa = t / (p.acc_noise * p.acc_noise * p.acc_tau) / (1.0 + excess * excess);
-        evidence += observation_exponent(&scale3(&s.acc_filter.y, 1.0 / an), &UP, kappa);
+        let widen = 1.0 + excess * excess;
+        let kappa = t / (p.acc_noise * p.acc_noise * p.acc_tau) / widen;
+        let up_b = scale3(&s.acc_filter.y, 1.0 / an);
+        evidence += observation_exponent(&up_b, &UP, kappa);
         observed = true;
+        tilt = Some((up_b, p.acc_noise * p.acc_noise * widen));
     }
     let heading = s.mag.heading_error();
     if let Some(delta) = heading {
@@ -625,6 +662,14 @@ fn correct(p: &AhrsParams, c: &Coeffs, core: &mut Core<4>, s: &mut SampleState) 
         evidence += heading_exponent(&q4::mul(&rz, &q_prior), kappa);
         observed = true;
     }
+    s.health.correction(
+        t,
+        &lam_prior,
+        &q4::rotate_inverse(&q_prior, &UP),
+        tilt.as_ref().map(|(b, v)| (b, *v)),
+        heading.map(|d| (d, p.mag_noise * p.mag_noise)),
+        an.is_finite().then(|| (an - p.gravity) / p.acc_reject),
+    );
     if observed {
         core.update_precision(&evidence)?;
     }

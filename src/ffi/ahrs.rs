@@ -4,13 +4,18 @@
 use super::args::{args, get_into, Arg, Fill};
 use super::guard::{free_handle, guard, handle, handle_mut, FfiResult};
 use super::status::bingham_status;
-use crate::ahrs::{Ahrs, AhrsParams};
+use crate::ahrs::{Ahrs, AhrsHealth, AhrsParams};
 
 /// The C name of [`AhrsParams`] (cbindgen renames the struct itself; this alias is for Rust
 /// code calling the C functions).
 /// cbindgen:ignore
 #[allow(non_camel_case_types)]
 pub type bingham_ahrs_params = AhrsParams;
+
+/// The C name of [`AhrsHealth`].
+/// cbindgen:ignore
+#[allow(non_camel_case_types)]
+pub type bingham_ahrs_health_report = AhrsHealth;
 
 /// An attitude and heading reference system on the recursive Bingham filter: gyroscope
 /// propagation, accelerometer and magnetometer as exact Bayes updates of a Bingham distribution
@@ -227,6 +232,30 @@ pub unsafe extern "C" fn bingham_ahrs_update_batch_spread(
     })
 }
 
+/// As `bingham_ahrs_update_batch_spread()`, also writing the health score
+/// (`bingham_ahrs_health()`'s `score`: about 1 when the sensors agree with the model, above
+/// `BINGHAM_AHRS_HEALTH_THRESHOLD` an input mistake is likely) after each sample into
+/// `health` (n doubles, or `NULL`).
+///
+/// # Safety
+/// As `bingham_ahrs_update_batch_spread()`; `health`: `NULL` or n writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_update_batch_health(
+    a: *mut bingham_ahrs,
+    n: usize,
+    gyr: *const f64,
+    acc: *const f64,
+    mag: *const f64,
+    quat: *mut f64,
+    spread: *mut f64,
+    health: *mut f64,
+) -> bingham_status {
+    guard("bingham_ahrs_update_batch_health", || {
+        // SAFETY: forwarded caller contract.
+        unsafe { batch_health(a, n, gyr, acc, mag, quat, spread, health) }
+    })
+}
+
 unsafe fn batch(
     a: *mut bingham_ahrs,
     n: usize,
@@ -236,21 +265,37 @@ unsafe fn batch(
     quat: *mut f64,
     spread: *mut f64,
 ) -> FfiResult<()> {
+    // SAFETY: forwarded caller contract.
+    unsafe { batch_health(a, n, gyr, acc, mag, quat, spread, std::ptr::null_mut()) }
+}
+
+#[allow(clippy::too_many_arguments)]
+unsafe fn batch_health(
+    a: *mut bingham_ahrs,
+    n: usize,
+    gyr: *const f64,
+    acc: *const f64,
+    mag: *const f64,
+    quat: *mut f64,
+    spread: *mut f64,
+    health: *mut f64,
+) -> FfiResult<()> {
     // SAFETY: caller contract.
     let ahrs = unsafe { handle_mut("a", a)? };
     // SAFETY: caller contract: n rows of 3 readable and of 4 (and n) writable doubles, not
     // overlapping.
-    let (g, ac, q, m, s) = unsafe {
+    let (g, ac, q, m, s, h) = unsafe {
         args!(
             gyr: rows [n; 3],
             acc: rows [n; 3],
             quat: mut rows [n; 4],
             mag: opt rows [n; 3],
-            spread: opt mut [n]
+            spread: opt mut [n],
+            health: opt mut [n]
         )
         .read()?
     };
-    ahrs.inner.update_batch(g, ac, m, q, s)?;
+    ahrs.inner.update_batch_health(g, ac, m, q, s, h)?;
     Ok(())
 }
 
@@ -375,6 +420,36 @@ pub unsafe extern "C" fn bingham_ahrs_angular_spread(
                 ahrs.angular_spread(v.try_into().expect("4 values"))
             })
         }
+    })
+}
+
+/// The health readout: how well the sensors have agreed with the model over the last
+/// `BINGHAM_AHRS_HEALTH_TIME` (5 s). `score` is about 1 when they agree; above
+/// `BINGHAM_AHRS_HEALTH_THRESHOLD` (10) the input is likely wrong — a gyroscope in °/s instead
+/// of rad/s, a wrong `sample_time`, swapped or mirrored magnetometer axes. `mag_rejected`
+/// near 1 for long: the magnetometer is disturbed or its axes are wrong. `mag_dip` of the
+/// wrong sign for the place (negative north of the magnetic equator): the accelerometer's
+/// (or magnetometer's) sign is flipped, which no other signal shows. Definitions in
+/// docs/guide.md ("Health readout"). All zero before the first correction (20 ms after the
+/// first sample).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `out`). On error `*out` is not written.
+///
+/// # Safety
+/// `a`: a live handle; `out`: a writable `bingham_ahrs_health_report`.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_health(
+    a: *const bingham_ahrs,
+    out: *mut AhrsHealth,
+) -> bingham_status {
+    guard("bingham_ahrs_health", || {
+        // SAFETY: caller contract.
+        let ahrs = unsafe { handle("a", a)? };
+        // SAFETY: caller contract.
+        let (out,) = unsafe { args!(out: out).read()? };
+        // SAFETY: checked place.
+        unsafe { out.set(ahrs.inner.health()) };
+        Ok(())
     })
 }
 

@@ -556,6 +556,16 @@ impl<V, S: Store<V>> Store<V> for (S,) {
     }
 }
 
+impl<V, W, S: Store<V>, T: Store<W>> Store<(V, W)> for (S, T) {
+    unsafe fn store(self, (v, w): (V, W)) {
+        // SAFETY: forwarded contract.
+        unsafe {
+            self.0.store(v);
+            self.1.store(w);
+        }
+    }
+}
+
 /// Checked output arrays filled from consecutive pieces of one library buffer (see
 /// [`get_into`]).
 pub(crate) trait Fill {

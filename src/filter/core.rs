@@ -84,7 +84,7 @@ impl<const D: usize> Core<D> {
     }
 
     /// `M_L = L(ẑ) D M_v`: the likelihood's principal directions.
-    fn likelihood_m(zhat: &Vect<D>, m_v: &Mat<D>) -> Mat<D> {
+    pub(super) fn likelihood_m(zhat: &Vect<D>, m_v: &Mat<D>) -> Mat<D> {
         let mut dm = *m_v;
         for mut row in dm.row_iter_mut().skip(1) {
             row.neg_mut();

@@ -34,6 +34,7 @@
 
 mod control_variate;
 mod core;
+mod gate;
 mod noise;
 mod nonlinear;
 mod nonlinear_options;
@@ -48,6 +49,7 @@ use crate::distribution::Bingham;
 use crate::error::{Error, Result};
 
 pub(crate) use self::core::Core;
+pub use gate::Gated;
 pub(crate) use noise::Noise;
 pub use nonlinear::{
     CORRECTION_PASSES, MAX_TEMPERING_STEPS, MIN_CORRECTION_SHARE, TEMPERING_RESIDUAL,
@@ -210,6 +212,39 @@ impl BinghamFilter {
     /// Arguments and errors as for [`BinghamFilter::update`].
     pub fn log_likelihood(&self, measurement: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<f64> {
         dispatch!(&self.inner, c => c.log_likelihood(measurement, m_v, z_v))
+    }
+
+    /// The surprise of `measurement` (a health readout and the statistic of the gate):
+    /// `s = 2 (log p(ŷ) − log p(measurement))` ≥ 0, `p` the predictive density of
+    /// [`log_likelihood`](Self::log_likelihood) and `ŷ = x̂ ⊕ v̂` the predicted measurement
+    /// (the modes of the state and of the noise). When the state and the noise are
+    /// concentrated and the model holds, `s` is a χ² variable with `d − 1` degrees of freedom
+    /// (mean 3 for quaternions; above 16.27 with probability 0.1 %, for d = 2 above 10.83); a
+    /// measurement that does not fit the state — a quaternion given in (x, y, z, w) order, a
+    /// fix in another frame — scores hundreds. Directions where the state or the noise is
+    /// broad contribute little. The filter is not changed. Definition and derivation: module
+    /// `gate`; measured in tests/filter_health.rs.
+    ///
+    /// Arguments and errors as for [`update`](Self::update).
+    pub fn surprise(&self, measurement: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<f64> {
+        dispatch!(&self.inner, c => c.surprise(measurement, m_v, z_v))
+    }
+
+    /// The likelihood gate: [`update`](Self::update) if the measurement's
+    /// [`surprise`](Self::surprise) is at most `max_surprise` (≥ 0; `f64::INFINITY` accepts
+    /// every measurement), otherwise nothing changes. Returns the surprise and whether the
+    /// update was applied; a gated-out measurement is not an error.
+    ///
+    /// Errors: those of [`update`](Self::update), [`Error::InvalidArgument`] for a NaN or
+    /// negative `max_surprise`. On error the filter is unchanged.
+    pub fn update_gated(
+        &mut self,
+        measurement: &[f64],
+        m_v: &[f64],
+        z_v: &[f64],
+        max_surprise: f64,
+    ) -> Result<Gated> {
+        dispatch!(&mut self.inner, c => c.update_gated(measurement, m_v, z_v, max_surprise))
     }
 
     /// World-frame prediction (Glover & Kaelbling 2013): the state becomes the distribution of

@@ -1,0 +1,232 @@
+//! The AHRS's health readout: how well the sensors agree with the model, so that a mistake in
+//! the input (units, signs, axes, the period) shows instead of yielding a confident wrong
+//! orientation.
+//!
+//! At every correction (module `ahrs`, step 5) the low-passed accelerometer direction `ā` and
+//! the heading error `δ` of the averaged field are compared with the prediction before the
+//! correction, each normalized by the variance it should have if the model held: the state's
+//! own spread in that direction (from the prior's precision `Λ`, `Σ = Λ⁺`, body frame) plus the
+//! measurement's (`acc_noise²·(1 + ((|ā| − g)/acc_reject)²)` for the direction of "up",
+//! `mag_noise²` for the heading — the parameters' own meaning). With `b̂` the predicted
+//! body-frame "up" and `e` the tilt innovation (the angle between `b̂` and `ā` along the great
+//! circle, a vector in the plane perpendicular to `b̂`):
+//!
+//! - tilt: `ν_a = eᵀ (P Σ' P + σ_a² P)⁺ e`, `Σ' = [b̂]× Σ [b̂]×ᵀ`, `P = I − b̂ b̂ᵀ` (2 degrees of
+//!   freedom, a χ²₂ variable when the model holds and the errors are Gaussian);
+//! - heading: `ν_m = δ² / (b̂ᵀ Σ b̂ + σ_m²)` (1 degree of freedom).
+//!
+//! Each is averaged per degree of freedom over [`HEALTH_TIME`] (an exponential average over
+//! the corrections, which come every 20 ms at every sample rate), so that one burst of linear
+//! acceleration does not count as a mistake while a wrong model, which disagrees all the time,
+//! does. The score is the larger of the two averages: about 1 when the model holds, and the
+//! readout flags the input when it exceeds [`HEALTH_THRESHOLD`].
+//!
+//! What the score cannot see, the readout reports directly: the fraction of magnetometer
+//! samples the disturbance test refused over the last [`HEALTH_TIME`] (a magnetometer whose
+//! axes are swapped or mirrored fails the test most of the time once the sensor turns), and the
+//! field's dip. An accelerometer whose sign is flipped (gravity instead of specific force) is
+//! consistent with every other signal — the negation commutes with every rotation, so an
+//! upside-down world explains the samples as well as the right one — except through the sign
+//! of the dip: the Earth's field points below the horizon north of the magnetic equator, so a
+//! negative dip there means a flipped accelerometer (or magnetometer).
+
+use nalgebra::{Matrix3, Vector3};
+
+use super::bias::pinv;
+
+/// The time constant (s) of the health averages: long enough that one burst of linear
+/// acceleration (a fraction of a second) or a short magnetic disturbance does not raise the
+/// score past the threshold, short enough to flag a wrong input within seconds of motion.
+pub const HEALTH_TIME: f64 = 5.0;
+
+/// The score above which the readout flags the input as inconsistent with the model:
+/// the average normalized innovation is this many times what the model predicts. Measured
+/// (tests/ahrs_health.rs, docs/accuracy.md § "AHRS health"): correct input stays below it
+/// on the simulated suite and the BROAD recordings; each of the input mistakes the test makes
+/// exceeds it within 10 s of motion.
+pub const HEALTH_THRESHOLD: f64 = 10.0;
+
+/// The AHRS's health readout (`bingham_ahrs_health_report` in C): see the module `ahrs::health` for
+/// the definitions. All values finite; before the first correction all zero.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AhrsHealth {
+    /// The larger of the tilt and heading scores: about 1 when the sensors agree with the
+    /// model; above `HEALTH_THRESHOLD` (10) the input is likely wrong (a gyroscope in °/s, a
+    /// wrong sample time, swapped magnetometer axes).
+    pub score: f64,
+    /// The squared deviation of the low-passed accelerometer's norm from `gravity`, in units
+    /// of `acc_reject`, averaged over `HEALTH_TIME` (5 s).
+    pub gravity_score: f64,
+    /// The normalized tilt innovation per degree of freedom, averaged over `HEALTH_TIME` (5 s).
+    pub tilt_score: f64,
+    /// The normalized heading innovation, averaged over `HEALTH_TIME` (5 s) of corrections
+    /// with a heading observation (0 without one).
+    pub heading_score: f64,
+    /// The angle (rad) between the predicted and the low-passed accelerometer's "up" at the
+    /// last correction.
+    pub tilt_innovation: f64,
+    /// The heading error (rad, about the world vertical) of the averaged field at the last
+    /// correction with a heading observation (0 without one).
+    pub heading_innovation: f64,
+    /// The fraction (0 to 1) of magnetometer samples the disturbance test refused, averaged
+    /// over `HEALTH_TIME` (5 s) of samples that carried a field (0 without any).
+    pub mag_rejected: f64,
+    /// The dip of the reference field (rad), positive when the field points below the
+    /// horizon (north of the magnetic equator); 0 without a reference (`has_mag_reference`
+    /// = 0). Of the wrong sign for the place: a flipped accelerometer (or magnetometer).
+    pub mag_dip: f64,
+    /// 1 when a magnetic reference exists (a field has been seen), else 0.
+    pub has_mag_reference: i32,
+}
+
+/// An exponential average with its start-up bias removed (the mean of the values seen so far,
+/// weighted towards the recent ones).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct Average {
+    sum: f64,
+    weight: f64,
+}
+
+impl Average {
+    fn push(&mut self, x: f64, alpha: f64) {
+        self.sum += alpha * (x - self.sum);
+        self.weight += alpha * (1.0 - self.weight);
+    }
+
+    fn value(&self) -> f64 {
+        if self.weight > 0.0 {
+            self.sum / self.weight
+        } else {
+            0.0
+        }
+    }
+}
+
+/// The running state of the readout, part of the AHRS's per-sample state.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(super) struct HealthState {
+    gravity: Average,
+    tilt: Average,
+    heading: Average,
+    rejected: Average,
+    tilt_innovation: f64,
+    heading_innovation: f64,
+}
+
+impl HealthState {
+    /// One magnetometer sample that carried a field, of duration `dt` (s): `used` whether the
+    /// disturbance test let it through.
+    pub(super) fn mag_sample(&mut self, used: bool, dt: f64) {
+        let alpha = (dt / HEALTH_TIME).min(1.0);
+        self.rejected.push(if used { 0.0 } else { 1.0 }, alpha);
+    }
+
+    /// One correction of period `t` (s) with the prior's body-frame precision `lam` (rad⁻²),
+    /// the predicted body-frame up `b_hat` (unit), the observed one `b` (unit) with its
+    /// angular variance `var_a` (rad², or `None` without a tilt observation), and the heading
+    /// error `delta` (rad) with its variance `var_m` (or `None`).
+    pub(super) fn correction(
+        &mut self,
+        t: f64,
+        lam: &Matrix3<f64>,
+        b_hat: &[f64; 3],
+        tilt: Option<(&[f64; 3], f64)>,
+        heading: Option<(f64, f64)>,
+        gravity_excess: Option<f64>,
+    ) {
+        let alpha = (t / HEALTH_TIME).min(1.0);
+        if let Some(x) = gravity_excess {
+            self.gravity.push(x * x, alpha);
+        }
+        let sigma = pinv(lam);
+        let bh = Vector3::from(*b_hat);
+        if let Some((b, var_a)) = tilt {
+            let b = Vector3::from(*b);
+            let c = bh.cross(&b);
+            let angle = c.norm().atan2(bh.dot(&b));
+            // the innovation as a vector in the plane perpendicular to b̂, towards b
+            let dir = b - bh * bh.dot(&b);
+            let e = if dir.norm() > 0.0 {
+                dir.normalize() * angle
+            } else {
+                Vector3::zeros()
+            };
+            let k = bh.cross_matrix();
+            let p = Matrix3::identity() - bh * bh.transpose();
+            let s = p * (k * sigma * k.transpose()) * p + p * var_a;
+            let nis = (e.transpose() * pinv(&s) * e)[0];
+            self.tilt.push(nis / 2.0, alpha);
+            self.tilt_innovation = angle;
+        }
+        if let Some((delta, var_m)) = heading {
+            let var = (bh.transpose() * sigma * bh)[0].max(0.0) + var_m;
+            self.heading.push(delta * delta / var, alpha);
+            self.heading_innovation = delta;
+        }
+    }
+
+    /// The readout, with the reference dip `dip_above` (rad above the horizon, as the
+    /// magnetometer's state keeps it) if there is a reference.
+    pub(super) fn readout(&self, dip_above: Option<f64>) -> AhrsHealth {
+        let (gravity, tilt, heading) = (
+            self.gravity.value(),
+            self.tilt.value(),
+            self.heading.value(),
+        );
+        AhrsHealth {
+            score: gravity.max(tilt).max(heading),
+            gravity_score: gravity,
+            tilt_score: tilt,
+            heading_score: heading,
+            tilt_innovation: self.tilt_innovation,
+            heading_innovation: self.heading_innovation,
+            mag_rejected: self.rejected.value(),
+            mag_dip: dip_above.map_or(0.0, |d| -d),
+            has_mag_reference: i32::from(dip_above.is_some()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_average_is_the_mean_of_equal_values_from_the_start() {
+        let mut a = Average::default();
+        for _ in 0..3 {
+            a.push(2.5, 0.01);
+        }
+        assert!((a.value() - 2.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_tilt_innovation_of_one_standard_deviation_scores_one_half_per_axis() {
+        // prior precision 1/σ² isotropic, measurement variance 0: an innovation of σ along
+        // one tangent direction gives ν = 1, per degree of freedom 1/2
+        let sd: f64 = 0.01;
+        let lam = Matrix3::identity() / (sd * sd);
+        let mut h = HealthState::default();
+        let b = [sd.sin(), 0.0, sd.cos()];
+        h.correction(0.02, &lam, &[0.0, 0.0, 1.0], Some((&b, 0.0)), None, None);
+        let r = h.readout(None);
+        assert!((r.tilt_score - 0.5).abs() < 1e-6, "{}", r.tilt_score);
+        assert!((r.tilt_innovation - sd).abs() < 1e-12);
+        // the heading variance adds the prior's spread about up and the measurement's
+        h.correction(
+            0.02,
+            &lam,
+            &[0.0, 0.0, 1.0],
+            None,
+            Some((2.0 * sd, sd * sd)),
+            Some(0.5),
+        );
+        let r = h.readout(Some(-1.0));
+        assert!((r.heading_score - 2.0).abs() < 1e-9, "{}", r.heading_score);
+        assert_eq!(r.score, r.heading_score);
+        assert!((r.gravity_score - 0.25).abs() < 1e-12);
+        assert_eq!(r.mag_dip, 1.0);
+        assert_eq!(r.has_mag_reference, 1);
+    }
+}
