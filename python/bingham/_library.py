@@ -76,6 +76,11 @@ _SIGNATURES = {
     "bingham_filter_predict_rotation": (_STATUS, [ctypes.c_void_p, _D, _D, _D]),
     "bingham_filter_update": (_STATUS, [ctypes.c_void_p, _D, _D, _D]),
     "bingham_filter_log_likelihood": (_STATUS, [ctypes.c_void_p, _D, _D, _D, _D]),
+    "bingham_filter_surprise": (_STATUS, [ctypes.c_void_p, _D, _D, _D, _D]),
+    "bingham_filter_update_gated": (
+        _STATUS,
+        [ctypes.c_void_p, _D, _D, _D, ctypes.c_double, _D, ctypes.POINTER(ctypes.c_int32)],
+    ),
     "bingham_filter_update_vector": (_STATUS, [ctypes.c_void_p, _D, _D, ctypes.c_double]),
     "bingham_filter_log_likelihood_vector": (
         _STATUS,

@@ -63,6 +63,8 @@ _PYTHON_NAMES: Dict[str, str] = {
     "bingham_filter_predict_rotation": "Filter.predict_rotation",
     "bingham_filter_update": "Filter.update",
     "bingham_filter_log_likelihood": "Filter.log_likelihood",
+    "bingham_filter_surprise": "Filter.surprise",
+    "bingham_filter_update_gated": "Filter.update_gated",
     "bingham_filter_update_vector": "Filter.update_vector",
     "bingham_filter_log_likelihood_vector": "Filter.log_likelihood_vector",
     "bingham_filter_predict_nonlinear": "Filter.predict_nonlinear",
