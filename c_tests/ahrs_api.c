@@ -398,6 +398,39 @@ static void test_ahrs_params_and_new(void) {
     }
     CHECK_STATUS(bingham_ahrs_params_default(0.01, NULL), BINGHAM_ERR_NULL_ARGUMENT);
     check_null_msg("bingham_ahrs_params_default", "p");
+    /* a rate in Hz passed as the period: refused, the message says so and gives the period */
+    const double rates[3] = {100.0, 1000.0, 1.5};
+    for (int k = 0; k < 3; ++k) {
+        fill(&p, sizeof p);
+        CHECK_STATUS(bingham_ahrs_params_default(rates[k], &p), BINGHAM_ERR_INVALID_ARGUMENT);
+        CHECK(untouched(&p, sizeof p));
+        check_msg("bingham_ahrs_params_default", "did you pass a rate in Hz?");
+        check_msg("bingham_ahrs_params_default", "bingham_ahrs_params_from_rate(");
+    }
+    check_msg("bingham_ahrs_params_default", "for 1.5 Hz pass 0.6666");
+    CHECK_OK(bingham_ahrs_params_default(BINGHAM_AHRS_MAX_SAMPLE_TIME, &p)); /* the bound itself */
+    CHECK(p.sample_time == 1.0 && BINGHAM_AHRS_MAX_SAMPLE_TIME == 1.0);
+
+    /* the rate in Hz: the defaults for the period 1/hz */
+    CHECK_OK(bingham_ahrs_params_from_rate(100.0, &p));
+    CHECK_OK(bingham_ahrs_params_default(0.01, &q));
+    CHECK(p.sample_time == 0.01 && memcmp(&p, &q, sizeof p) == 0);
+    CHECK_OK(bingham_ahrs_params_from_rate(400.0, &p));
+    CHECK(p.sample_time == 0.0025);
+    CHECK_OK(bingham_ahrs_params_from_rate(1.0, &p));
+    CHECK(p.sample_time == 1.0);
+    const double bad_hz[7] = {0.5, 0.0, -100.0, NAN, INFINITY, -INFINITY, 2e6};
+    for (int k = 0; k < 7; ++k) {
+        fill(&p, sizeof p);
+        CHECK_STATUS(bingham_ahrs_params_from_rate(bad_hz[k], &p), BINGHAM_ERR_INVALID_ARGUMENT);
+        CHECK(untouched(&p, sizeof p));
+        check_msg("bingham_ahrs_params_from_rate", "`hz`");
+    }
+    check_msg("bingham_ahrs_params_from_rate", "above 1000000 Hz");
+    CHECK_STATUS(bingham_ahrs_params_from_rate(0.5, &p), BINGHAM_ERR_INVALID_ARGUMENT);
+    check_msg("bingham_ahrs_params_from_rate", "below 1 Hz");
+    CHECK_STATUS(bingham_ahrs_params_from_rate(100.0, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg("bingham_ahrs_params_from_rate", "p");
     CHECK_OK(bingham_ahrs_params_default(0.01, &p));
     CHECK(p.sample_time == 0.01);
     CHECK_OK(bingham_ahrs_params_default(0.01, &q));
@@ -409,8 +442,8 @@ static void test_ahrs_params_and_new(void) {
     CHECK(a == (bingham_ahrs *)no_access_page);
     CHECK_STATUS(bingham_ahrs_new(&p, NULL), BINGHAM_ERR_NULL_ARGUMENT);
     check_null_msg("bingham_ahrs_new", "out");
-    const double bad_st[4] = {0.0, NAN, -1.0, INFINITY};
-    for (int k = 0; k < 4; ++k) {
+    const double bad_st[5] = {0.0, NAN, -1.0, INFINITY, 100.0};
+    for (int k = 0; k < 5; ++k) {
         q = p;
         q.sample_time = bad_st[k];
         CHECK_STATUS(bingham_ahrs_new(&q, &a), BINGHAM_ERR_INVALID_ARGUMENT);

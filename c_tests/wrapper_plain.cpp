@@ -764,6 +764,34 @@ static void test_ahrs() {
                      return bingham_ahrs_params_default(-1.0, &pp);
                  },
                  "negative sample time");
+    // a rate in Hz where the period is expected: refused with the hint; from_rate takes the rate
+    expect_error([] { bingham::Ahrs bad(100.0); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [] {
+                     bingham_ahrs_params pp;
+                     return bingham_ahrs_params_default(100.0, &pp);
+                 },
+                 "a rate passed as the sample time");
+    CHECK(bingham::last_error_message().find("did you pass a rate in Hz?") != std::string::npos);
+    {
+        const bingham::AhrsParams pr = bingham::ahrs_params_from_rate(100.0);
+        CHECK(pr.sample_time == 0.01 && std::memcmp(&pr, &pw, sizeof pr) == 0);
+        bingham::Ahrs r = bingham::Ahrs::from_rate(100.0);
+        r.update({0.1, -0.05, 0.2}, {0.3, -0.2, 9.7}, {0.1, 20.0, -40.0});
+        bingham::Ahrs s = bingham::Ahrs(dt);
+        s.update({0.1, -0.05, 0.2}, {0.3, -0.2, 9.7}, {0.1, 20.0, -40.0});
+        const bingham::Quaternion qr = r.quaternion(), qs = s.quaternion();
+        CHECK(qr.w == qs.w && qr.x == qs.x && qr.y == qs.y && qr.z == qs.z);
+        CHECK(bingham::Ahrs::from_rate(1.0).gyro_bias_covariance()[0] == pw.bias_std * pw.bias_std);
+    }
+    for (const double hz : {0.5, 0.0, -100.0, std::nan(""), HUGE_VAL}) {
+        expect_error([hz] { bingham::Ahrs::from_rate(hz); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                     [hz] {
+                         bingham_ahrs_params pp;
+                         return bingham_ahrs_params_from_rate(hz, &pp);
+                     },
+                     "a bad sample rate");
+        CHECK(bingham::last_error_message().find("`hz`") != std::string::npos);
+    }
     bingham::AhrsParams bad_p = pw;
     bad_p.acc_noise = -1;
     expect_error([&] { bingham::Ahrs bad(bad_p); }, BINGHAM_ERR_INVALID_ARGUMENT,

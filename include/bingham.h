@@ -139,9 +139,14 @@
 #define BINGHAM_AHRS_MIN_SAMPLE_TIME 1e-6
 
 /**
- * The largest sampling period (s) the AHRS accepts.
+ * The largest sampling period (s) the AHRS accepts (`BINGHAM_AHRS_MAX_SAMPLE_TIME` in C): the
+ * sample rate must be at least 1 Hz. The AHRS integrates the gyroscope between samples, which
+ * needs many samples per second (IMUs run at 50 Hz to a few kHz); a `sample_time` above 1 s is
+ * almost always a rate in Hz passed where the period in seconds is expected, and is refused
+ * with a message saying so. `bingham_ahrs_params_from_rate()` in C (`AhrsParams::from_rate` in
+ * Rust) takes the rate instead.
  */
-#define BINGHAM_AHRS_MAX_SAMPLE_TIME 1e3
+#define BINGHAM_AHRS_MAX_SAMPLE_TIME 1.0
 
 /**
  * The smallest process noise per step (rad) the AHRS accepts (`gyro_noise·√sample_time`): below
@@ -421,14 +426,16 @@ typedef struct bingham_nonlinear_report {
 
 /**
  * Parameters of the AHRS (`bingham_ahrs_params` in C, `AhrsParams` in Rust). The defaults —
- * `bingham_ahrs_params_default()` in C, `AhrsParams::new(sample_time)` in Rust — are one set
+ * `bingham_ahrs_params_default()` / `bingham_ahrs_params_from_rate()` in C,
+ * `AhrsParams::new(sample_time)` / `AhrsParams::from_rate(hz)` in Rust — are one set
  * for all recordings and sample rates, tuned on the nine BROAD trials and a simulated IMU
  * suite; docs/guide.md ("The defaults and why") gives the mechanism behind each value. Angles in radians,
  * times in seconds. Fill it with the defaults, then change fields if needed.
  */
 typedef struct bingham_ahrs_params {
     /**
-     * Sampling period in seconds (1e-6 to 1e3).
+     * Sampling period in seconds, the period, not the rate: 0.01 for 100 Hz. From 1e-6 to 1
+     * (`BINGHAM_AHRS_MIN_SAMPLE_TIME` to `BINGHAM_AHRS_MAX_SAMPLE_TIME`).
      */
     double sample_time;
     /**
@@ -1709,11 +1716,14 @@ enum bingham_status bingham_filter_update_nonlinear_opts(struct bingham_filter *
                                                          struct bingham_nonlinear_report *report);
 
 /**
- * Fills `p` with the default parameters for the sampling period `sample_time` (seconds, > 0).
- * The defaults are the tuned set.
+ * Fills `p` with the default parameters for the sampling period `sample_time` (seconds: the
+ * period, not the rate; 0.01 for 100 Hz). The defaults are the tuned set. For the rate in Hz use
+ * `bingham_ahrs_params_from_rate()`.
  *
  * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`), `BINGHAM_ERR_INVALID_ARGUMENT` (`sample_time`
- * outside 1e-6..1e3 s or not finite). On error `*p` is not written.
+ * outside 1e-6..1 s (`BINGHAM_AHRS_MIN_SAMPLE_TIME`..`BINGHAM_AHRS_MAX_SAMPLE_TIME`) or not
+ * finite; above 1 s the message asks "did you pass a rate in Hz?"). On error `*p` is not
+ * written.
  *
  * # Safety
  * `p`: a writable `bingham_ahrs_params`.
@@ -1721,9 +1731,24 @@ enum bingham_status bingham_filter_update_nonlinear_opts(struct bingham_filter *
 enum bingham_status bingham_ahrs_params_default(double sample_time, struct bingham_ahrs_params *p);
 
 /**
+ * Fills `p` with the default parameters for the sample rate `hz` (samples per second, Hz):
+ * those of `bingham_ahrs_params_default(1.0 / hz, p)`. E.g. `bingham_ahrs_params_from_rate(100,
+ * &p)` gives `p.sample_time = 0.01`.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`), `BINGHAM_ERR_INVALID_ARGUMENT` (`hz` not finite,
+ * ≤ 0, below 1 Hz = 1 / `BINGHAM_AHRS_MAX_SAMPLE_TIME`, or above 1e6 Hz = 1 /
+ * `BINGHAM_AHRS_MIN_SAMPLE_TIME`). On error `*p` is not written.
+ *
+ * # Safety
+ * `p`: a writable `bingham_ahrs_params`.
+ */
+enum bingham_status bingham_ahrs_params_from_rate(double hz, struct bingham_ahrs_params *p);
+
+/**
  * Creates an AHRS with the parameters `p` (validated: every field finite, periods, noises,
  * thresholds and `bias_std` > 0, `bias_time` and `gyro_scale_noise` ≥ 0, `sample_time` within
- * 1e-6..1e3 s, the process noise per step `gyro_noise·sqrt(sample_time)` at least 1e-6 rad).
+ * 1e-6..1 s (above 1 s the message asks "did you pass a rate in Hz?"), the process noise per
+ * step `gyro_noise·sqrt(sample_time)` at least 1e-6 rad).
  *
  * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`, `out`), `BINGHAM_ERR_INVALID_ARGUMENT` (a bad
  * field; the message names it). On error `*out` is not written.

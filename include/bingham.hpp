@@ -1073,13 +1073,25 @@ private:
 
 // ---- the AHRS --------------------------------------------------------------------------------
 
-/// The AHRS parameters (the C struct; angles rad, times s). Start from ahrs_default_params().
+/// The AHRS parameters (the C struct; angles rad, times s). Start from ahrs_default_params() or
+/// ahrs_params_from_rate().
 using AhrsParams = bingham_ahrs_params;
 
-/// The tuned default parameters for the sampling period `sample_time` (seconds).
+/// The tuned default parameters for the sampling period `sample_time` (seconds: the period, not
+/// the rate; 0.01 for 100 Hz). Throws Error(BINGHAM_ERR_INVALID_ARGUMENT) outside 1e-6..1 s
+/// (above 1 s the message asks "did you pass a rate in Hz?").
 inline AhrsParams ahrs_default_params(double sample_time) {
     AhrsParams p{};
     detail::check(bingham_ahrs_params_default(sample_time, &p));
+    return p;
+}
+
+/// The tuned default parameters for the sample rate `hz` (samples per second):
+/// ahrs_default_params(1.0 / hz). Throws Error(BINGHAM_ERR_INVALID_ARGUMENT) if `hz` is not
+/// finite, not > 0, below 1 Hz or above 1e6 Hz.
+inline AhrsParams ahrs_params_from_rate(double hz) {
+    AhrsParams p{};
+    detail::check(bingham_ahrs_params_from_rate(hz, &p));
     return p;
 }
 
@@ -1089,8 +1101,12 @@ inline AhrsParams ahrs_default_params(double sample_time) {
 /// A moved-from Ahrs is empty: its methods throw Error(BINGHAM_ERR_NULL_ARGUMENT).
 class Ahrs {
 public:
-    /// With the default parameters for the sampling period `sample_time` (s).
+    /// With the default parameters for the sampling period `sample_time` (s: the period, not the
+    /// rate; `Ahrs(0.01)` or `Ahrs::from_rate(100)` for 100 Hz).
     explicit Ahrs(double sample_time) : Ahrs(ahrs_default_params(sample_time)) {}
+    /// With the default parameters for the sample rate `hz` (samples per second, 1 to 1e6 Hz):
+    /// `Ahrs::from_rate(100)` is `Ahrs(0.01)`. Throws as ahrs_params_from_rate().
+    static Ahrs from_rate(double hz) { return Ahrs(ahrs_params_from_rate(hz)); }
     /// With the given parameters (validated by the library; the message names a bad field).
     explicit Ahrs(const AhrsParams &params) { detail::check(bingham_ahrs_new(&params, &a_)); }
     ~Ahrs() { bingham_ahrs_free(a_); }

@@ -686,6 +686,60 @@ fn parameters_are_validated() {
     }
 }
 
+/// A rate in Hz passed where the period is expected is refused with a hint (issue 23), and
+/// `from_rate` takes the rate.
+#[test]
+fn a_rate_passed_as_the_sample_time_is_refused_and_from_rate_takes_it() {
+    use bingham::ahrs::{MAX_SAMPLE_TIME, MIN_SAMPLE_TIME};
+    assert_eq!(MAX_SAMPLE_TIME, 1.0);
+    for hz in [100.0, 1000.0, 1.5, 1e3 + 1.0] {
+        let p = AhrsParams::new(hz);
+        for r in [p.validate(), Ahrs::new(&p).map(|_| ())] {
+            match r {
+                Err(Error::InvalidArgument(m)) => {
+                    assert!(m.contains("did you pass a rate in Hz?"), "{m}");
+                    assert!(m.contains(&format!("for {hz} Hz pass {}", 1.0 / hz)), "{m}");
+                    assert!(m.contains(&format!("AhrsParams::from_rate({hz})")), "{m}");
+                    assert!(
+                        m.contains(&format!("bingham_ahrs_params_from_rate({hz}, &p)")),
+                        "{m}"
+                    );
+                }
+                other => panic!("sample_time = {hz}: {other:?}"),
+            }
+        }
+    }
+    // the bound itself is accepted
+    assert!(Ahrs::new(&AhrsParams::new(MAX_SAMPLE_TIME)).is_ok());
+    assert!(Ahrs::new(&AhrsParams::new(MIN_SAMPLE_TIME)).is_ok());
+
+    // from_rate: the defaults for the period 1/hz, bit for bit
+    assert_eq!(AhrsParams::from_rate(100.0).unwrap(), AhrsParams::new(0.01));
+    assert_eq!(AhrsParams::from_rate(100.0).unwrap().sample_time, 0.01);
+    assert_eq!(AhrsParams::from_rate(400.0).unwrap().sample_time, 0.0025);
+    assert_eq!(AhrsParams::from_rate(1.0).unwrap(), AhrsParams::new(1.0));
+    assert_eq!(AhrsParams::from_rate(1e6).unwrap().sample_time, 1e-6);
+    for (hz, needle) in [
+        (0.5, "below 1 Hz"),
+        (0.999, "below 1 Hz"),
+        (0.0, "finite and > 0"),
+        (-0.0, "finite and > 0"),
+        (-1.0, "finite and > 0"),
+        (-100.0, "finite and > 0"),
+        (f64::NAN, "finite and > 0"),
+        (f64::INFINITY, "finite and > 0"),
+        (f64::NEG_INFINITY, "finite and > 0"),
+        (2e6, "above 1000000 Hz"),
+    ] {
+        match AhrsParams::from_rate(hz) {
+            Err(Error::InvalidArgument(m)) => {
+                assert!(m.contains("`hz`") && m.contains(needle), "{hz}: {m}")
+            }
+            other => panic!("from_rate({hz}): {other:?}"),
+        }
+    }
+}
+
 #[test]
 fn ahrs_is_send_and_sync() {
     fn check<T: Send + Sync + Clone>() {}

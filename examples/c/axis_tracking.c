@@ -220,10 +220,11 @@ int main(int argc, char **argv) {
         double mu_v[D];
         gaussian_fit(MV, ZV, mu_v, kr);
     }
-    printf("axis tracking (d = 2), JAIF Sec. 7.1: %d Monte Carlo runs of %d steps\n", RUNS, STEPS);
-    printf("  Kalman covariances (Gaussian fit to one mode, JAIF eq. 57):\n");
-    printf("    C0 = [%.2g %.2g; %.2g %.2g]  Cw = [%.2g %.2g; %.2g %.2g]  Cv = [%.2g %.2g; %.2g %.2g]\n",
-           c0[0], c0[1], c0[2], c0[3], kq[0], kq[1], kq[2], kq[3], kr[0], kr[1], kr[2], kr[3]);
+    printf("Axis tracking (d = 2, JAIF Sec. 7.1), Bingham vs Kalman filter: %d Monte Carlo runs of %d steps\n", RUNS,
+           STEPS);
+    printf("  Kalman covariances (Gaussian fit to one mode, JAIF eq. 57; diagonals): C0 = (%.2g %.2g)  "
+           "Cw = (%.2g %.2g)  Cv = (%.2g %.2g)\n",
+           c0[0], c0[3], kq[0], kq[3], kr[0], kr[3]);
 
     for (r = 0; r < RUNS; ++r) {
         double w[STEPS * D], v[STEPS * D], xs[STEPS * D], zs[STEPS * D], modes[STEPS * D],
@@ -295,8 +296,8 @@ int main(int argc, char **argv) {
         double mb = sum_b / RUNS, mk = sum_k / RUNS;
         double sb = sqrt((sq_b / RUNS - mb * mb) / (RUNS - 1)),
                sk = sqrt((sq_k / RUNS - mk * mk) / (RUNS - 1));
-        printf("  mean RMSE  Bingham filter %.4f rad (%.2f deg) +- %.4f\n", mb, mb * 180 / PI, sb);
-        printf("             Kalman filter  %.4f rad (%.2f deg) +- %.4f\n", mk, mk * 180 / PI, sk);
+        printf("  mean RMSE  Bingham filter %.4f rad (%.2f deg) +- %.4f rad (standard error)\n", mb, mb * 180 / PI, sb);
+        printf("             Kalman filter  %.4f rad (%.2f deg) +- %.4f rad\n", mk, mk * 180 / PI, sk);
         printf("  Bingham filter better in %d of %d runs (%d %%), Kalman in %d (%d %%)\n", wins,
                RUNS, 100 * wins / RUNS, RUNS - wins, 100 * (RUNS - wins) / RUNS);
         printf("  mean error at steps 1, 5, 20, 100: Bingham %.3f %.3f %.3f %.3f, "

@@ -38,7 +38,8 @@ Bingham fit(const std::vector<double> &s, std::size_t d) {
 }  // namespace
 
 int main() {
-    std::printf("bingham %s\n", bingham_version());
+    std::printf("The C API from C++11 (bingham %s): a d = 2 MLE round trip and an error as an exception\n",
+                bingham_version());
     // A d = 2 (axis / complex number) distribution around (cos 0.3, sin 0.3).
     const double c = std::cos(0.3), s = std::sin(0.3);
     const std::vector<double> m = {-s, c, c, s};  // columns: (-s, c) and the mode (c, s)
@@ -46,7 +47,7 @@ int main() {
     std::vector<double> moment(4);
     check(bingham_second_moment(2, m.data(), z.data(), moment.data()));
     Bingham b = fit(moment, 2);
-    std::printf("MLE round trip: z = (%.12f, %.1f), mode = (%.12f, %.12f)\n", b.z[0], b.z[1], b.m[1], b.m[3]);
+    std::printf("  MLE round trip: z = (%.12f, %.1f), mode = (%.12f, %.12f)\n", b.z[0], b.z[1], b.m[1], b.m[3]);
     if (std::fabs(b.z[0] + 8.0) > 1e-8 || std::fabs(std::fabs(b.m[1] * c + b.m[3] * s) - 1.0) > 1e-10) {
         std::fprintf(stderr, "round trip failed\n");
         return 1;
@@ -56,7 +57,7 @@ int main() {
         std::fprintf(stderr, "expected an error\n");
         return 1;
     } catch (const std::runtime_error &e) {
-        std::printf("as expected: %s\n", e.what());
+        std::printf("  as expected: %s\n", e.what());
     }
     return 0;
 }

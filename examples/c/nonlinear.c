@@ -2,7 +2,8 @@
  * prediction (bingham_filter_predict_nonlinear) and a pinhole camera for the measurement
  * (bingham_filter_update_nonlinear). The same scenario as examples/python/nonlinear.py.
  *
- *   usage: nonlinear [steps]
+ *   usage: nonlinear [steps]     (a row every 25 steps; BINGHAM_VERBOSE=1: every 10, and the
+ *                                 failing callback's message)
  *
  * Quaternions are scalar first, (w, x, y, z), body -> world; q and -q are the same rotation.
  * The world frame is the frame of a fixed camera (x right, y down, z along the optical axis).
@@ -29,6 +30,7 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "bingham.h"
 
@@ -200,6 +202,8 @@ int main(int argc, char **argv) {
     double sum_err2 = 0, sum_spread2 = 0, wsum = 0;
     bingham_filter *f = NULL;
     bingham_status st;
+    const char *v_env = getenv("BINGHAM_VERBOSE");
+    const int verbose = v_env && *v_env && strcmp(v_env, "0") != 0, every = verbose ? 10 : 25;
 
     if (steps < 1 || steps > MAX_STEPS) {
         fprintf(stderr, "steps must be in 1..%d\n", MAX_STEPS);
@@ -231,7 +235,9 @@ int main(int argc, char **argv) {
                                         &count, &reproduced),
           "bingham_deterministic_samples");
     for (i = 0; i < (int)count; ++i) wsum += weights[i];
-    printf("deterministic samples of the initial state: %u points (at most %u), weights sum to %.15f, "
+    printf("Nonlinear models through C callbacks (rate law, pinhole camera): %d steps of %.2f s, known truth\n",
+           steps, DT);
+    printf("  deterministic samples of the initial state: %u points (at most %u), weights sum to %.15f, "
            "moments reproduced up to order %d\n",
            (unsigned)count, (unsigned)max_count, wsum, reproduced);
 
@@ -244,8 +250,9 @@ int main(int argc, char **argv) {
     {
         char msg[512];
         bingham_last_error_message(msg, sizeof msg, NULL);
-        printf("failing transition: status %d (%s), filter unchanged: %s\n  message: %s\n", (int)st,
-               bingham_status_str((int)st), z[0] == z_after[0] && m[0] == m_after[0] ? "yes" : "NO", msg);
+        printf("  a failing transition callback: status %d (%s), filter unchanged: %s\n", (int)st,
+               bingham_status_str((int)st), z[0] == z_after[0] && m[0] == m_after[0] ? "yes" : "NO");
+        if (verbose) printf("  message: %s\n", msg);
         if (st != BINGHAM_ERR_CALLBACK) {
             bingham_filter_free(f);
             free(w);
@@ -253,8 +260,7 @@ int main(int argc, char **argv) {
         }
     }
 
-    printf("\nnonlinear rate law + pinhole camera, %d steps of %.2f s\n", steps, DT);
-    printf("  time   error(deg)  spread(deg)  likelihood calls\n");
+    printf("  time (s)  error (deg)  spread (deg)  likelihood calls\n");
     for (k = 0; k < steps; ++k) {
         camera_measurement meas;
         double next[D];
@@ -272,8 +278,8 @@ int main(int argc, char **argv) {
         check(bingham_filter_mode(f, mode), "bingham_filter_mode");
         check(bingham_filter_angular_spread(f, spread), "bingham_filter_angular_spread");
         calls += meas.calls;
-        if (k == 0 || k % 10 == 9)
-            printf("%6.2f   %8.2f   %9.2f   %8d\n", (k + 1) * DT, angle(mode, truth) * 180 / PI,
+        if (k == 0 || k % every == every - 1)
+            printf("%10.2f %12.2f %13.2f %17d\n", (k + 1) * DT, angle(mode, truth) * 180 / PI,
                    spread[D - 1] * 180 / PI, meas.calls);
         if (k >= settle) {
             double e = angle(mode, truth);
@@ -285,15 +291,16 @@ int main(int argc, char **argv) {
     bingham_filter_free(f);
     free(w);
 
-    printf("%d likelihood calls in %d updates\n", calls, steps);
+    printf("%d likelihood calls in %d updates", calls, steps);
     if (n_rms > 0) {
         double rms = sqrt(sum_err2 / n_rms), rms_spread = sqrt(sum_spread2 / n_rms);
-        printf("after the first second: RMS error %.2f deg, RMS spread %.2f deg\n", rms * 180 / PI,
+        printf("; after the first second: RMS error %.2f deg, RMS spread %.2f deg", rms * 180 / PI,
                rms_spread * 180 / PI);
         if (!(rms < 3 * rms_spread)) {
-            fprintf(stderr, "the error is not consistent with the filter's spread\n");
+            fprintf(stderr, "\nthe error is not consistent with the filter's spread\n");
             return 1;
         }
     }
+    printf("\n");
     return 0;
 }

@@ -199,8 +199,9 @@ int main(int argc, char **argv) {
     gaussian_fit(M0, Z0, 7, mu0, c0);
     gaussian_fit(MW, ZW, 8, kmu_w, kq);
     gaussian_fit(MV, ZV, 9, mu_v, kr);
-    printf("quaternion tracking (d = 4), JAIF Sec. 7.2: %d Monte Carlo runs of %d steps\n", RUNS,
-           STEPS);
+    printf("Quaternion tracking (d = 4, JAIF Sec. 7.2), Bingham vs Kalman filter: %d Monte Carlo runs of %d "
+           "steps\n",
+           RUNS, STEPS);
     printf("  Kalman covariances (Gaussian fit to one mode, diagonals): C0 = (%.2g %.2g %.2g %.2g)"
            "\n    Cw = (%.2g %.2g %.2g %.2g)  Cv = (%.2g %.2g %.2g %.2g)\n",
            c0[0], c0[5], c0[10], c0[15], kq[0], kq[5], kq[10], kq[15], kr[0], kr[5], kr[10],
@@ -268,8 +269,8 @@ int main(int argc, char **argv) {
         double mb = sum_b / RUNS, mk = sum_k / RUNS;
         double sb = sqrt((sq_b / RUNS - mb * mb) / (RUNS - 1)),
                sk = sqrt((sq_k / RUNS - mk * mk) / (RUNS - 1));
-        printf("  mean RMSE  Bingham filter %.4f rad (%.2f deg) +- %.4f\n", mb, mb * 180 / PI, sb);
-        printf("             Kalman filter  %.4f rad (%.2f deg) +- %.4f\n", mk, mk * 180 / PI, sk);
+        printf("  mean RMSE  Bingham filter %.4f rad (%.2f deg) +- %.4f rad (standard error)\n", mb, mb * 180 / PI, sb);
+        printf("             Kalman filter  %.4f rad (%.2f deg) +- %.4f rad\n", mk, mk * 180 / PI, sk);
         printf("  Bingham filter better in %d of %d runs (%d %%), Kalman in %d (%d %%)\n", wins,
                RUNS, 100 * wins / RUNS, RUNS - wins, 100 * (RUNS - wins) / RUNS);
         printf("  mean error at steps 1, 5, 20, 100: Bingham %.3f %.3f %.3f %.3f, "

@@ -16,7 +16,8 @@
  * The bank is an example, not library API: it is a loop over handles and a running sum of
  * bingham_spin_filter_log_likelihood(); which priors, MAP or mixture weights, pruning and
  * resetting are the application's choices. Quaternions are scalar first (w, x, y, z), and
- * q o r = qmul(q, r) rotates by r, then by q. Output: one trajectory frame by frame, then the
+ * q o r = qmul(q, r) rotates by r, then by q. Output: frames 1, 2, 5, 10, 20, 40 of one trajectory
+ * (BINGHAM_VERBOSE=1: frames 1 to 6 and every 5th), then the
  * summary of 24 trajectories (2 of each spin type; the spin error's median and worst case: a
  * single filter now and then locks onto a wrong spin in the first frames, while the readings
  * are still ambiguous, and keeps it; the bank's summed likelihoods rule that out).
@@ -24,6 +25,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "bingham.h"
 
@@ -103,6 +105,8 @@ int main(void) {
     int correct[3] = {0, 0, 0};
     double err_single[TRIALS], err_bank[TRIALS];
     int trial, k;
+    const char *v_env = getenv("BINGHAM_VERBOSE");
+    const int verbose = v_env && *v_env && strcmp(v_env, "0") != 0;
 
     /* noises: on the spin (-400)^3 at the identity, on the observation (-40, -40, -10) */
     centred(none, 400, mw, zw);
@@ -115,6 +119,8 @@ int main(void) {
         centred(q, 50, mp[k], zp[k]); /* the bank's priors */
     }
 
+    printf("Which way is it spinning? One spin filter (QBF-2) vs a bank of %d, %d trajectories of %d frames\n",
+           TYPES, TRIALS, FRAMES);
     for (trial = 0; trial < TRIALS; ++trial) {
         const int truth = trial % TYPES;
         double spin[4], x[4], noise[4 * FRAMES], sum[TYPES] = {0};
@@ -128,8 +134,8 @@ int main(void) {
         check(bingham_spin_filter_new(eye, uniform, mb, zb, &single), "bingham_spin_filter_new");
         for (k = 0; k < TYPES; ++k) check(bingham_spin_filter_new(eye, uniform, mp[k], zp[k], &bank[k]), "new");
         if (trial == SHOW)
-            printf("one trajectory, true spin %s %.1f deg/frame (spin errors in degrees per frame)\n"
-                   "frame  seen  QBF-2 error  bank pick  bank error\n",
+            printf("  one trajectory, true spin %s %.1f deg/frame (spin errors in deg/frame)\n"
+                   "  frame  seen  QBF-2 error  bank pick  bank error\n",
                    AXIS_NAMES[truth / 3], RATES_DEG[truth % 3]);
 
         for (frame = 1; frame <= FRAMES; ++frame) {
@@ -151,8 +157,9 @@ int main(void) {
                 if (sum[k] > sum[best]) best = k; /* the bank's answer: the largest summed log-likelihood */
             check(bingham_spin_filter_spin_mode(single, qs), "spin_mode");
             check(bingham_spin_filter_spin_mode(bank[best], qb), "spin_mode");
-            if (trial == SHOW && (frame <= 6 || frame % 5 == 0))
-                printf("%5d  %-4s  %11.1f  %5s %4.1f  %10.1f\n", frame, seen ? "yes" : "no", angle_deg(qs, spin),
+            if (trial == SHOW && (verbose ? frame <= 6 || frame % 5 == 0
+                                          : frame <= 2 || frame == 5 || frame == 10 || frame == 20 || frame == 40))
+                printf("  %5d  %-4s  %11.1f  %5s %4.1f  %10.1f\n", frame, seen ? "yes" : "no", angle_deg(qs, spin),
                        AXIS_NAMES[best / 3], RATES_DEG[best % 3], angle_deg(qb, spin));
             if (frame == 10 || frame == 20 || frame == 40) correct[frame == 10 ? 0 : frame / 20] += best == truth;
             if (frame == FRAMES) err_single[trial] = angle_deg(qs, spin), err_bank[trial] = angle_deg(qb, spin);
@@ -160,8 +167,8 @@ int main(void) {
         bingham_spin_filter_free(single);
         for (k = 0; k < TYPES; ++k) bingham_spin_filter_free(bank[k]);
     }
-    printf("\n%d trajectories (2 of each spin type):\n", TRIALS);
-    printf("  bank picks the true spin type after 10 / 20 / 40 frames: %d / %d / %d of %d\n", correct[0],
+    printf("  the bank picks the true spin type after 10 / 20 / 40 frames in %d / %d / %d of %d trajectories\n",
+           correct[0],
            correct[1], correct[2], TRIALS);
     qsort(err_single, TRIALS, sizeof(double), by_value);
     qsort(err_bank, TRIALS, sizeof(double), by_value);

@@ -22,8 +22,8 @@ int main() try {
         const double e = Eigen::Quaterniond(filter.mode_quaternion()).angularDistance(truth) * deg;
         sum_sq += e * e;
     }
-    std::printf("RMS error %.3f deg over %d steps; final spread %.3f deg\n", std::sqrt(sum_sq / steps), steps,
-                filter.uncertainty() * deg);
+    std::printf("Gyroscope + fixes at 100 Hz, C++ wrapper: RMS error %.3f deg over %d steps; final spread %.3f deg\n",
+                std::sqrt(sum_sq / steps), steps, filter.uncertainty() * deg);
 } catch (const bingham::Error &e) {
     std::fprintf(stderr, "bingham: %s\n", e.what());
     return 1;

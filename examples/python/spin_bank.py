@@ -19,8 +19,8 @@ filter takes the one with the higher predictive likelihood.
 The bank is an example, not library API: a list of filters and a running sum of
 ``SpinFilter.log_likelihood``; which priors, MAP or mixture weights, pruning and resetting are
 the application's choices. Quaternions are scalar first ``(w, x, y, z)``;
-``bh.quat_multiply(q, r)`` rotates by r, then by q. Output: one trajectory frame by frame, then
-the summary of 24 trajectories (2 of each spin type; the spin error's median and worst case: a
+``bh.quat_multiply(q, r)`` rotates by r, then by q. Output: frames 1, 2, 5, 10, 20, 40 of one
+trajectory (BINGHAM_VERBOSE=1: frames 1 to 6 and every 5th), then the summary of 24 trajectories (2 of each spin type; the spin error's median and worst case: a
 single filter now and then locks onto a wrong spin in the first frames, while the readings are
 still ambiguous, and keeps it; the bank's summed likelihoods rule that out). The numbers are
 those of the C program.
@@ -30,6 +30,7 @@ demo`` installs it into a virtual environment and runs this program with it).
 """
 
 import math
+import os
 import sys
 
 import numpy as np
@@ -41,6 +42,8 @@ except ImportError as e:
 
 FRAMES, TRIALS = 40, 24
 SHOW = 7  # the trajectory printed frame by frame
+# BINGHAM_VERBOSE=1: frames 1 to 6 and every 5th of that trajectory, else frames 1, 2, 5, 10, 20, 40
+VERBOSE = os.environ.get("BINGHAM_VERBOSE", "0") not in ("", "0")
 AXES = {"x": [1, 0, 0], "y": [0, 1, 0], "z": [0, 0, 1], "xyz": [1, 1, 1]}
 RATES_DEG = [45.0, 67.5, 90.0]
 FLIP = np.array([0.0, 0.0, 0.0, 1.0])  # 180° about the body z axis
@@ -106,22 +109,23 @@ def run(trial, show):
         err_single = angle_deg(single.spin_mode(), spin)
         err_bank = angle_deg(bank[best].spin_mode(), spin)
         results[frame] = (best == truth, err_single, err_bank)
-        if show and (frame <= 6 or frame % 5 == 0):
+        if show and (frame <= 6 or frame % 5 == 0 if VERBOSE else frame in (1, 2, 5, 10, 20, 40)):
             name, rate = TYPES[best]
             seen_text = "yes" if seen else "no"
-            print(f"{frame:5d}  {seen_text:4s}  {err_single:11.1f}  {name:>5s} {rate:4.1f}  {err_bank:10.1f}")
+            print(f"  {frame:5d}  {seen_text:4s}  {err_single:11.1f}  {name:>5s} {rate:4.1f}  {err_bank:10.1f}")
     return results
 
 
 def main():
     name, rate = TYPES[SHOW % len(TYPES)]
-    print(f"one trajectory, true spin {name} {rate:.1f} deg/frame (spin errors in degrees per frame)")
-    print("frame  seen  QBF-2 error  bank pick  bank error")
+    print(f"Which way is it spinning? One spin filter (QBF-2) vs a bank of {len(TYPES)}, "
+          f"{TRIALS} trajectories of {FRAMES} frames")
+    print(f"  one trajectory, true spin {name} {rate:.1f} deg/frame (spin errors in deg/frame)")
+    print("  frame  seen  QBF-2 error  bank pick  bank error")
     runs = [run(t, show=t == SHOW) for t in range(TRIALS)]
-    print(f"\n{TRIALS} trajectories (2 of each spin type):")
     right = [sum(r[f][0] for r in runs) for f in (10, 20, 40)]
-    print("  bank picks the true spin type after 10 / 20 / 40 frames: "
-          f"{right[0]} / {right[1]} / {right[2]} of {TRIALS}")
+    print("  the bank picks the true spin type after 10 / 20 / 40 frames in "
+          f"{right[0]} / {right[1]} / {right[2]} of {TRIALS} trajectories")
     single = [r[FRAMES][1] for r in runs]
     bank = [r[FRAMES][2] for r in runs]
     print(

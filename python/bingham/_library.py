@@ -105,6 +105,7 @@ _SIGNATURES = {
     "bingham_noise_from_angle_std": (_STATUS, [_SIZE, ctypes.c_double, _D, _D]),
     "bingham_angular_spread": (_STATUS, [_SIZE, _D, _D, _D]),
     "bingham_ahrs_params_default": (_STATUS, [ctypes.c_double, ctypes.c_void_p]),
+    "bingham_ahrs_params_from_rate": (_STATUS, [ctypes.c_double, ctypes.c_void_p]),
     "bingham_ahrs_new": (_STATUS, [ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p)]),
     "bingham_ahrs_free": (None, [ctypes.c_void_p]),
     "bingham_ahrs_clone": (_STATUS, [ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p)]),

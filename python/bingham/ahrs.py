@@ -113,6 +113,7 @@ class AhrsParams(ctypes.Structure):
                 "use AhrsParams.default(sample_time) or AhrsParams(sample_time=0.01, acc_noise=0.8)"
             )
         _known_fields(fields)
+        _refuse_rate(fields["sample_time"], "AhrsParams")
         ctypes.Structure.__init__(self)
         _check(lib().bingham_ahrs_params_default(float(fields["sample_time"]), ctypes.byref(self)))
         for name, value in fields.items():
@@ -123,6 +124,16 @@ class AhrsParams(ctypes.Structure):
     def default(cls, sample_time: float) -> "AhrsParams":
         """The library's tuned defaults for the sample time ``sample_time`` (seconds)."""
         return cls(sample_time=sample_time)
+
+    @classmethod
+    def from_rate(cls, hz: float) -> "AhrsParams":
+        """The library's tuned defaults for the sample rate ``hz`` (samples per second):
+        ``AhrsParams.default(1 / hz)`` (``bingham_ahrs_params_from_rate`` in C). ``hz`` must be
+        finite and at least 1 (the sample time at most 1 s), else :class:`ValueError`."""
+        hz = _check_rate(hz)
+        p = cls.from_buffer_copy(bytes(ctypes.sizeof(cls)))  # zeros, filled by the library
+        _check(lib().bingham_ahrs_params_from_rate(hz, ctypes.byref(p)))
+        return p
 
     def copy(self) -> "AhrsParams":
         """An independent copy (changing one does not change the other)."""
@@ -150,9 +161,39 @@ def _known_fields(names: Dict[str, float]) -> None:
         )
 
 
-# The largest ``sample_time`` (seconds) :class:`Ahrs` accepts: a larger value is almost surely a
-# rate in Hz (the C library itself accepts up to 1e3 s).
+# The largest ``sample_time`` (seconds) accepted (``BINGHAM_AHRS_MAX_SAMPLE_TIME`` in C): a
+# larger value is almost surely a rate in Hz. The library refuses it too; checked here first so
+# that the hint names the Python call.
 _MAX_SAMPLE_TIME = 1.0
+
+
+def _check_rate(hz: object) -> float:
+    """``hz`` as a float, or :class:`ValueError` if it is not finite, not > 0, or below
+    ``1 / _MAX_SAMPLE_TIME`` Hz."""
+    hz = float(hz)  # type: ignore[arg-type]
+    if not math.isfinite(hz) or hz <= 0.0:
+        raise ValueError(f"the sample rate must be finite and > 0 Hz, got {hz!r}")
+    if 1.0 / hz > _MAX_SAMPLE_TIME:
+        raise ValueError(
+            f"the sample rate {hz:g} Hz is below {1.0 / _MAX_SAMPLE_TIME:g} Hz "
+            f"(a sample time above {_MAX_SAMPLE_TIME:g} s)"
+        )
+    return hz
+
+
+def _refuse_rate(sample_time: object, what: str) -> None:
+    """:class:`ValueError` ("did you pass a rate in Hz?") for a finite ``sample_time`` above
+    ``_MAX_SAMPLE_TIME``; other values are left to the library."""
+    try:
+        st = float(sample_time)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return
+    if math.isfinite(st) and st > _MAX_SAMPLE_TIME:
+        raise ValueError(
+            f"{what}: sample_time = {st:g} s: did you pass a rate in Hz? "
+            f"use Ahrs.from_rate({st:g}) (sample_time is the period in seconds, "
+            f"at most {_MAX_SAMPLE_TIME:g} s)"
+        )
 
 
 def _rows3(a: ArrayLike, name: str, n: Optional[int] = None) -> Array:
@@ -174,18 +215,14 @@ class Ahrs:
     them. ``params`` is copied, never modified (the overrides go to the copy, kept as
     ``self.params``), and its ``sample_time`` must equal ``sample_time`` (else
     :class:`ValueError`). A ``sample_time`` above 1 s raises :class:`ValueError` ("did you pass
-    a rate in Hz?"): the Python binding's bound, the C library accepts up to 1e3 s. An unknown
+    a rate in Hz?"), as in :class:`AhrsParams` (the library's bound,
+    ``BINGHAM_AHRS_MAX_SAMPLE_TIME``). An unknown
     override raises :class:`TypeError`, a value the library refuses :class:`BinghamError`.
     """
 
     def __init__(self, sample_time: float, params: Optional[AhrsParams] = None, **overrides: float) -> None:
         sample_time = float(sample_time)
-        if math.isfinite(sample_time) and sample_time > _MAX_SAMPLE_TIME:
-            raise ValueError(
-                f"sample_time = {sample_time:g} s: did you pass a rate in Hz? "
-                f"use Ahrs.from_rate({sample_time:g}) (sample_time is the period in seconds, "
-                f"at most {_MAX_SAMPLE_TIME:g} s)"
-            )
+        _refuse_rate(sample_time, "Ahrs")
         if params is None:
             p = AhrsParams.default(sample_time)
         else:
@@ -210,17 +247,10 @@ class Ahrs:
     @classmethod
     def from_rate(cls, hz: float, **overrides: float) -> "Ahrs":
         """The AHRS for a sample rate of ``hz`` (samples per second): ``Ahrs(1 / hz,
-        **overrides)``. ``hz`` must be finite and at least 1 (the sample time at most 1 s),
-        else :class:`ValueError`."""
-        hz = float(hz)
-        if not math.isfinite(hz) or hz <= 0.0:
-            raise ValueError(f"the sample rate must be finite and > 0 Hz, got {hz!r}")
-        if 1.0 / hz > _MAX_SAMPLE_TIME:
-            raise ValueError(
-                f"the sample rate {hz:g} Hz is below {1.0 / _MAX_SAMPLE_TIME:g} Hz "
-                f"(a sample time above {_MAX_SAMPLE_TIME:g} s)"
-            )
-        return cls(1.0 / hz, None, **overrides)
+        **overrides)``, the parameters from :meth:`AhrsParams.from_rate`. ``hz`` must be finite
+        and at least 1 (the sample time at most 1 s), else :class:`ValueError`."""
+        p = AhrsParams.from_rate(hz)
+        return cls(p.sample_time, p, **overrides)
 
     def close(self) -> None:
         """Releases the handle (idempotent)."""

@@ -77,6 +77,7 @@ _PYTHON_NAMES: Dict[str, str] = {
     "bingham_filter_update_world": "Filter.update_world",
     "bingham_filter_log_likelihood_world": "Filter.log_likelihood_world",
     "bingham_ahrs_params_default": "AhrsParams.default",
+    "bingham_ahrs_params_from_rate": "AhrsParams.from_rate",
     "bingham_ahrs_new": "Ahrs",
     "bingham_ahrs_update": "Ahrs.update",
     "bingham_ahrs_update_batch": "Ahrs.update_batch",

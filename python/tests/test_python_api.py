@@ -129,6 +129,14 @@ def test_ahrs_from_rate():
     for bad in (0, -100, math.nan, math.inf, -math.inf, 0.5):
         with pytest.raises(ValueError):
             bh.Ahrs.from_rate(bad)
+        with pytest.raises(ValueError):
+            bh.AhrsParams.from_rate(bad)
+    # AhrsParams.from_rate (bingham_ahrs_params_from_rate): the defaults for the period 1/hz
+    assert bh.AhrsParams.from_rate(100).as_dict() == bh.AhrsParams.default(0.01).as_dict()
+    assert bh.AhrsParams.from_rate(400).sample_time == 0.0025
+    with pytest.raises(bh.BinghamError) as e:  # above 1e6 Hz: the library's bound
+        bh.AhrsParams.from_rate(2e6)
+    assert str(e.value).startswith("AhrsParams.from_rate"), str(e.value)
 
 
 def test_ahrs_refuses_a_rate_passed_as_sample_time():
@@ -139,12 +147,23 @@ def test_ahrs_refuses_a_rate_passed_as_sample_time():
         assert f"sample_time = {hz:g} s" in msg and "did you pass a rate in Hz?" in msg, msg
         assert f"use Ahrs.from_rate({hz:g})" in msg, msg
     bh.Ahrs(1.0).close()  # the bound itself is accepted
-    # the parameters alone are not checked (the library accepts up to 1e3 s) ...
-    p = bh.AhrsParams.default(2.0)
-    assert p.sample_time == 2.0
-    # ... but the AHRS is
+    # the parameters are refused the same way (the library's bound, BINGHAM_AHRS_MAX_SAMPLE_TIME)
+    for make in (lambda: bh.AhrsParams.default(2.0), lambda: bh.AhrsParams(sample_time=2.0)):
+        with pytest.raises(ValueError) as e:
+            make()
+        msg = str(e.value)
+        assert msg.startswith("AhrsParams: sample_time = 2 s: did you pass a rate in Hz?"), msg
+        assert "use Ahrs.from_rate(2)" in msg, msg
+    # a structure changed by hand is refused by the AHRS
+    p = bh.AhrsParams.default(DT)
+    p.sample_time = 2.0
     with pytest.raises(ValueError, match="did you pass a rate in Hz"):
         bh.Ahrs(2.0, params=p)
+    # ... and by the library, when the Python check is bypassed
+    lib = bh._library.lib()
+    h = ctypes.c_void_p()
+    assert lib.bingham_ahrs_new(ctypes.byref(p), ctypes.byref(h)) == bh.Status.ERR_INVALID_ARGUMENT
+    assert "did you pass a rate in Hz?" in bh.last_error_message()
     # non-finite and non-positive values remain the library's to refuse
     for bad in (0.0, -0.01, math.nan, math.inf):
         with pytest.raises(bh.BinghamError):

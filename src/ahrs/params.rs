@@ -5,8 +5,13 @@ use crate::error::{Error, Result};
 /// The smallest sampling period (s) the AHRS accepts.
 pub const MIN_SAMPLE_TIME: f64 = 1e-6;
 
-/// The largest sampling period (s) the AHRS accepts.
-pub const MAX_SAMPLE_TIME: f64 = 1e3;
+/// The largest sampling period (s) the AHRS accepts (`BINGHAM_AHRS_MAX_SAMPLE_TIME` in C): the
+/// sample rate must be at least 1 Hz. The AHRS integrates the gyroscope between samples, which
+/// needs many samples per second (IMUs run at 50 Hz to a few kHz); a `sample_time` above 1 s is
+/// almost always a rate in Hz passed where the period in seconds is expected, and is refused
+/// with a message saying so. `bingham_ahrs_params_from_rate()` in C (`AhrsParams::from_rate` in
+/// Rust) takes the rate instead.
+pub const MAX_SAMPLE_TIME: f64 = 1.0;
 
 /// The smallest process noise per step (rad) the AHRS accepts (`gyro_noise·√sample_time`): below
 /// it the state's concentrations could grow past what the moment matching resolves.
@@ -25,14 +30,16 @@ pub const MAX_LATENCY: f64 = 0.5;
 pub const LATENCY_ESTIMATE: f64 = -1.0;
 
 /// Parameters of the AHRS (`bingham_ahrs_params` in C, `AhrsParams` in Rust). The defaults —
-/// `bingham_ahrs_params_default()` in C, `AhrsParams::new(sample_time)` in Rust — are one set
+/// `bingham_ahrs_params_default()` / `bingham_ahrs_params_from_rate()` in C,
+/// `AhrsParams::new(sample_time)` / `AhrsParams::from_rate(hz)` in Rust — are one set
 /// for all recordings and sample rates, tuned on the nine BROAD trials and a simulated IMU
 /// suite; docs/guide.md ("The defaults and why") gives the mechanism behind each value. Angles in radians,
 /// times in seconds. Fill it with the defaults, then change fields if needed.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AhrsParams {
-    /// Sampling period in seconds (1e-6 to 1e3).
+    /// Sampling period in seconds, the period, not the rate: 0.01 for 100 Hz. From 1e-6 to 1
+    /// (`BINGHAM_AHRS_MIN_SAMPLE_TIME` to `BINGHAM_AHRS_MAX_SAMPLE_TIME`).
     pub sample_time: f64,
     /// Orientation process noise in rad/√s: the prediction adds isotropic rotation noise of
     /// variance `gyro_noise²` per second (the gyroscope's noise and model error; the bias's
@@ -109,7 +116,9 @@ pub struct AhrsParams {
 }
 
 impl AhrsParams {
-    /// The default (tuned) parameters for the sampling period `sample_time` (s).
+    /// The default (tuned) parameters for the sampling period `sample_time` (s; 0.01 for
+    /// 100 Hz). Not validated here: [`AhrsParams::validate`] (called by `Ahrs::new`) checks it;
+    /// [`AhrsParams::from_rate`] builds and checks them from the rate in Hz.
     pub fn new(sample_time: f64) -> AhrsParams {
         AhrsParams {
             sample_time,
@@ -138,10 +147,45 @@ impl AhrsParams {
         }
     }
 
+    /// The default (tuned) parameters for the sample rate `hz` (samples per second): those of
+    /// [`AhrsParams::new`]`(1.0 / hz)`, validated (`bingham_ahrs_params_from_rate()` in C).
+    ///
+    /// Errors: [`Error::InvalidArgument`] if `hz` is not finite or not > 0, below 1 Hz
+    /// (`1 / MAX_SAMPLE_TIME`: a period above [`MAX_SAMPLE_TIME`]) or above 1 MHz
+    /// (`1 / MIN_SAMPLE_TIME`: a period below [`MIN_SAMPLE_TIME`]).
+    pub fn from_rate(hz: f64) -> Result<AhrsParams> {
+        if !(hz.is_finite() && hz > 0.0) {
+            return Err(Error::InvalidArgument(format!(
+                "the AHRS sample rate `hz` must be finite and > 0 Hz, got {hz}"
+            )));
+        }
+        let sample_time = 1.0 / hz;
+        if sample_time > MAX_SAMPLE_TIME {
+            return Err(Error::InvalidArgument(format!(
+                "the AHRS sample rate `hz` = {hz} Hz is below {} Hz (a period above \
+                 {MAX_SAMPLE_TIME} s, the largest accepted): the AHRS integrates the gyroscope \
+                 and needs at least one sample per second",
+                1.0 / MAX_SAMPLE_TIME
+            )));
+        }
+        if sample_time < MIN_SAMPLE_TIME {
+            return Err(Error::InvalidArgument(format!(
+                "the AHRS sample rate `hz` = {hz} Hz is above {} Hz (a period below \
+                 {MIN_SAMPLE_TIME:e} s, the smallest accepted)",
+                1.0 / MIN_SAMPLE_TIME
+            )));
+        }
+        let params = AhrsParams::new(sample_time);
+        params.validate()?;
+        Ok(params)
+    }
+
     /// Checks every field (finite; periods, noises and thresholds positive; `bias_time ≥ 0`;
     /// `sample_time` within [`MIN_SAMPLE_TIME`, `MAX_SAMPLE_TIME`]; the process noise per step
     /// at least [`MIN_STEP_NOISE`]; `mag_latency` and `acc_latency` within 0 to
-    /// [`MAX_LATENCY`], `mag_latency` also [`LATENCY_ESTIMATE`]).
+    /// [`MAX_LATENCY`], `mag_latency` also [`LATENCY_ESTIMATE`]). A `sample_time` above
+    /// [`MAX_SAMPLE_TIME`] (1 s) is refused as a likely rate in Hz: the message asks "did you
+    /// pass a rate in Hz?" and gives the period to pass instead.
     pub fn validate(&self) -> Result<()> {
         let positive = [
             ("sample_time", self.sample_time),
@@ -171,10 +215,20 @@ impl AhrsParams {
                 )));
             }
         }
-        if !(MIN_SAMPLE_TIME..=MAX_SAMPLE_TIME).contains(&self.sample_time) {
+        if self.sample_time > MAX_SAMPLE_TIME {
+            let hz = self.sample_time;
+            return Err(Error::InvalidArgument(format!(
+                "AHRS parameter `sample_time` = {hz} s is above {MAX_SAMPLE_TIME} s (the \
+                 largest period accepted): did you pass a rate in Hz? `sample_time` is the period in \
+                 seconds (for {hz} Hz pass {}), or build the parameters from the rate with \
+                 AhrsParams::from_rate({hz}) (bingham_ahrs_params_from_rate({hz}, &p) in C)",
+                1.0 / hz
+            )));
+        }
+        if self.sample_time < MIN_SAMPLE_TIME {
             return Err(Error::InvalidArgument(format!(
                 "AHRS parameter `sample_time` must lie in [{MIN_SAMPLE_TIME:e}, \
-                 {MAX_SAMPLE_TIME:e}] s, got {}",
+                 {MAX_SAMPLE_TIME}] s, got {}",
                 self.sample_time
             )));
         }

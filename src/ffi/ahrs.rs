@@ -39,11 +39,14 @@ pub struct bingham_ahrs {
     inner: Ahrs,
 }
 
-/// Fills `p` with the default parameters for the sampling period `sample_time` (seconds, > 0).
-/// The defaults are the tuned set.
+/// Fills `p` with the default parameters for the sampling period `sample_time` (seconds: the
+/// period, not the rate; 0.01 for 100 Hz). The defaults are the tuned set. For the rate in Hz use
+/// `bingham_ahrs_params_from_rate()`.
 ///
 /// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`), `BINGHAM_ERR_INVALID_ARGUMENT` (`sample_time`
-/// outside 1e-6..1e3 s or not finite). On error `*p` is not written.
+/// outside 1e-6..1 s (`BINGHAM_AHRS_MIN_SAMPLE_TIME`..`BINGHAM_AHRS_MAX_SAMPLE_TIME`) or not
+/// finite; above 1 s the message asks "did you pass a rate in Hz?"). On error `*p` is not
+/// written.
 ///
 /// # Safety
 /// `p`: a writable `bingham_ahrs_params`.
@@ -63,9 +66,35 @@ pub unsafe extern "C" fn bingham_ahrs_params_default(
     })
 }
 
+/// Fills `p` with the default parameters for the sample rate `hz` (samples per second, Hz):
+/// those of `bingham_ahrs_params_default(1.0 / hz, p)`. E.g. `bingham_ahrs_params_from_rate(100,
+/// &p)` gives `p.sample_time = 0.01`.
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`), `BINGHAM_ERR_INVALID_ARGUMENT` (`hz` not finite,
+/// ≤ 0, below 1 Hz = 1 / `BINGHAM_AHRS_MAX_SAMPLE_TIME`, or above 1e6 Hz = 1 /
+/// `BINGHAM_AHRS_MIN_SAMPLE_TIME`). On error `*p` is not written.
+///
+/// # Safety
+/// `p`: a writable `bingham_ahrs_params`.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_params_from_rate(
+    hz: f64,
+    p: *mut AhrsParams,
+) -> bingham_status {
+    guard("bingham_ahrs_params_from_rate", || {
+        // SAFETY: caller contract.
+        let (p,) = unsafe { args!(p: out).read()? };
+        let params = AhrsParams::from_rate(hz)?;
+        // SAFETY: checked place.
+        unsafe { p.set(params) };
+        Ok(())
+    })
+}
+
 /// Creates an AHRS with the parameters `p` (validated: every field finite, periods, noises,
 /// thresholds and `bias_std` > 0, `bias_time` and `gyro_scale_noise` ≥ 0, `sample_time` within
-/// 1e-6..1e3 s, the process noise per step `gyro_noise·sqrt(sample_time)` at least 1e-6 rad).
+/// 1e-6..1 s (above 1 s the message asks "did you pass a rate in Hz?"), the process noise per
+/// step `gyro_noise·sqrt(sample_time)` at least 1e-6 rad).
 ///
 /// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`p`, `out`), `BINGHAM_ERR_INVALID_ARGUMENT` (a bad
 /// field; the message names it). On error `*out` is not written.

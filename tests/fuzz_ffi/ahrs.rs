@@ -36,10 +36,21 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
     // fields of bingham_ahrs_params may change)
     let dt = match rng.below(10) {
         0 => *rng.pick(&[0.0, -0.01, f64::NAN, f64::INFINITY, -f64::INFINITY]),
-        1 => *rng.pick(&[1e-300, 5e-324, 1e-6, 10.0, 1e10, f64::MAX]),
+        1 => *rng.pick(&[
+            1e-300,
+            5e-324,
+            1e-6,
+            1.0,
+            1.0000000000000002,
+            10.0,
+            100.0,
+            1e10,
+            f64::MAX,
+        ]),
         _ => *rng.pick(&[0.01, 0.005, 1.0 / 400.0, 0.02]),
     };
-    let valid_dt = (1e-6..=1e3).contains(&dt);
+    // above 1 s (BINGHAM_AHRS_MAX_SAMPLE_TIME) a sample time is refused as a likely rate in Hz
+    let valid_dt = (1e-6..=1.0).contains(&dt);
     // the latencies (s): valid 0..=0.5, or hostile
     let latency = |rng: &mut Rng64| match rng.below(4) {
         0 => *rng.pick(&[
