@@ -171,18 +171,19 @@
 #define BINGHAM_AHRS_LATENCY_ESTIMATE -1.0
 
 /**
- * The time constant (s) of the health averages: long enough that one burst of linear
+ * The time constant (s) of the health averages (`BINGHAM_AHRS_HEALTH_TIME` in C): long enough that one burst of linear
  * acceleration (a fraction of a second) or a short magnetic disturbance does not raise the
  * score past the threshold, short enough to flag a wrong input within seconds of motion.
  */
 #define BINGHAM_AHRS_HEALTH_TIME 5.0
 
 /**
- * The score above which the readout flags the input as inconsistent with the model:
- * the average normalized innovation is this many times what the model predicts. Measured
- * (tests/ahrs_health.rs, docs/accuracy.md § "AHRS health"): correct input stays below it
- * on the simulated suite and the BROAD recordings; each of the input mistakes the test makes
- * exceeds it within 10 s of motion.
+ * The score above which the readout flags the input as inconsistent with the model
+ * (`BINGHAM_AHRS_HEALTH_THRESHOLD` in C): the average normalized innovation is this many
+ * times what the model predicts. Measured (python/tests/test_health.py, docs/accuracy.md
+ * "AHRS health"): correct input stays at or below 2.5 on the simulated suite and the BROAD
+ * recordings; a gyroscope in °/s and a sample time 2× or 0.5× the truth exceed it within
+ * 10 s of motion.
  */
 #define BINGHAM_AHRS_HEALTH_THRESHOLD 10.0
 
@@ -557,27 +558,29 @@ typedef struct bingham_ahrs_params {
 } bingham_ahrs_params;
 
 /**
- * The AHRS's health readout (`bingham_ahrs_health_report` in C): see the module `ahrs::health` for
- * the definitions. All values finite; before the first correction all zero.
+ * The AHRS's health readout (`bingham_ahrs_health_report` in C, from `bingham_ahrs_health()`):
+ * how well the sensors have agreed with the model over the last `BINGHAM_AHRS_HEALTH_TIME`
+ * (5 s). Definitions in docs/guide.md ("Health readout"), measured figures in
+ * docs/accuracy.md ("AHRS health"). All values finite; before the first correction all zero.
  */
 typedef struct bingham_ahrs_health_report {
     /**
-     * The larger of the tilt and heading scores: about 1 when the sensors agree with the
-     * model; above `HEALTH_THRESHOLD` (10) the input is likely wrong (a gyroscope in °/s, a
-     * wrong sample time, swapped magnetometer axes).
+     * The largest of `gravity_score`, `tilt_score` and `heading_score`: about 1 or less when
+     * the sensors agree with the model; above `BINGHAM_AHRS_HEALTH_THRESHOLD` (10) the input
+     * is likely wrong (a gyroscope in °/s instead of rad/s, a wrong sample time).
      */
     double score;
     /**
      * The squared deviation of the low-passed accelerometer's norm from `gravity`, in units
-     * of `acc_reject`, averaged over `HEALTH_TIME` (5 s).
+     * of `acc_reject`, averaged over `BINGHAM_AHRS_HEALTH_TIME` (5 s).
      */
     double gravity_score;
     /**
-     * The normalized tilt innovation per degree of freedom, averaged over `HEALTH_TIME` (5 s).
+     * The normalized tilt innovation per degree of freedom, averaged over `BINGHAM_AHRS_HEALTH_TIME` (5 s).
      */
     double tilt_score;
     /**
-     * The normalized heading innovation, averaged over `HEALTH_TIME` (5 s) of corrections
+     * The normalized heading innovation, averaged over `BINGHAM_AHRS_HEALTH_TIME` (5 s) of corrections
      * with a heading observation (0 without one).
      */
     double heading_score;
@@ -593,7 +596,7 @@ typedef struct bingham_ahrs_health_report {
     double heading_innovation;
     /**
      * The fraction (0 to 1) of magnetometer samples the disturbance test refused, averaged
-     * over `HEALTH_TIME` (5 s) of samples that carried a field (0 without any).
+     * over `BINGHAM_AHRS_HEALTH_TIME` (5 s) of samples that carried a field (0 without any).
      */
     double mag_rejected;
     /**

@@ -728,6 +728,32 @@ public:
         return log_likelihood_raw(vec(measurement), noise);
     }
 
+    /// The outcome of update_gated().
+    struct Gated {
+        bool accepted;    ///< whether the update was applied
+        double surprise;  ///< the measurement's surprise (see surprise())
+    };
+    /// The measurement's surprise 2 (log p(y_hat) - log p(measurement)) >= 0 (y_hat: the modes of
+    /// state and noise composed): chi-square with d - 1 degrees of freedom when the model holds
+    /// (mean 3 for quaternions, above 16.27 with probability 0.1 %); a fix in the wrong
+    /// component order scores hundreds. See bingham_filter_surprise().
+    double surprise(const Quaternion &measurement, const Distribution &noise) const {
+        return surprise_raw(vec(measurement), noise);
+    }
+    /// surprise() for d = 2 (chi-square with 1 degree of freedom: above 10.83 with 0.1 %).
+    double surprise(std::complex<double> measurement, const Distribution &noise) const {
+        return surprise_raw(vec(measurement), noise);
+    }
+    /// update() if the surprise is at most max_surprise (>= 0; INFINITY: no gate), else nothing
+    /// changes; a gated-out measurement does not throw. See bingham_filter_update_gated().
+    Gated update_gated(const Quaternion &measurement, const Distribution &noise, double max_surprise) {
+        return update_gated_raw(vec(measurement), noise, max_surprise);
+    }
+    /// update_gated() for d = 2.
+    Gated update_gated(std::complex<double> measurement, const Distribution &noise, double max_surprise) {
+        return update_gated_raw(vec(measurement), noise, max_surprise);
+    }
+
     // World-frame steps (Glover & Kaelbling 2013): `q o r` is the Hamilton product q r ("rotate
     // by r, then by q"); the control and the noises act on the LEFT, in the world frame, where
     // predict_rotation() and update() compose on the right (body frame). The two agree for d = 2
@@ -877,6 +903,23 @@ private:
         double out = 0;
         detail::check(bingham_filter_log_likelihood(f_, measurement.data(), noise.M.data(), noise.z.data(), &out));
         return out;
+    }
+    double surprise_raw(const std::vector<double> &measurement, const Distribution &noise) const {
+        check_noise(noise, "bingham::Filter::surprise");
+        detail::require_dim(measurement.size() == d_, "bingham::Filter::surprise", "the measurement must have d entries");
+        double out = 0;
+        detail::check(bingham_filter_surprise(f_, measurement.data(), noise.M.data(), noise.z.data(), &out));
+        return out;
+    }
+    Gated update_gated_raw(const std::vector<double> &measurement, const Distribution &noise, double max_surprise) {
+        check_noise(noise, "bingham::Filter::update_gated");
+        detail::require_dim(measurement.size() == d_, "bingham::Filter::update_gated",
+                            "the measurement must have d entries");
+        double s = 0;
+        std::int32_t accepted = 0;
+        detail::check(bingham_filter_update_gated(f_, measurement.data(), noise.M.data(), noise.z.data(), max_surprise,
+                                                  &s, &accepted));
+        return Gated{accepted != 0, s};
     }
     void predict_world_raw(const std::vector<double> *u, const Distribution &noise) {
         check_noise(noise, "bingham::Filter::predict_world");
@@ -1160,12 +1203,13 @@ public:
 #if BINGHAM_HPP_EIGEN
     /// n samples as Eigen matrices (gyr, acc, mag: n x 3, any storage order; an empty (0-row)
     /// mag for none): returns the n x 4 quaternions (w, x, y, z per row). With `spread` non-null
-    /// it receives the n total angular spreads (rad, as uncertainty()) after each sample. A
-    /// refused sample throws; the samples before it have been processed.
+    /// it receives the n total angular spreads (rad, as uncertainty()) after each sample, with
+    /// `health` non-null the n health scores (health().score) after each sample. A refused
+    /// sample throws; the samples before it have been processed.
     template <class G, class A, class M>
     Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> update_batch(
         const Eigen::MatrixBase<G> &gyr, const Eigen::MatrixBase<A> &acc, const Eigen::MatrixBase<M> &mag,
-        Eigen::VectorXd *spread = nullptr) {
+        Eigen::VectorXd *spread = nullptr, Eigen::VectorXd *health = nullptr) {
         require("bingham::Ahrs::update_batch");
         const Eigen::Index n = gyr.rows();
         detail::require_dim(gyr.cols() == 3 && acc.cols() == 3 && acc.rows() == n &&
@@ -1175,20 +1219,20 @@ public:
         const Rows3 g = gyr, a = acc, m = mag;
         Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> q(n, 4);
         if (spread) spread->resize(n);
+        if (health) health->resize(n);
         if (n == 0) return q;
         const double *mp = mag.rows() == 0 ? nullptr : m.data();
-        if (spread)
-            detail::check(bingham_ahrs_update_batch_spread(a_, static_cast<std::size_t>(n), g.data(), a.data(), mp,
-                                                           q.data(), spread->data()));
-        else
-            detail::check(bingham_ahrs_update_batch(a_, static_cast<std::size_t>(n), g.data(), a.data(), mp, q.data()));
+        detail::check(bingham_ahrs_update_batch_health(a_, static_cast<std::size_t>(n), g.data(), a.data(), mp,
+                                                       q.data(), spread ? spread->data() : nullptr,
+                                                       health ? health->data() : nullptr));
         return q;
     }
     /// As above without a magnetometer.
     template <class G, class A>
     Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> update_batch(
-        const Eigen::MatrixBase<G> &gyr, const Eigen::MatrixBase<A> &acc, Eigen::VectorXd *spread = nullptr) {
-        return update_batch(gyr, acc, Eigen::Matrix<double, 0, 3>(), spread);
+        const Eigen::MatrixBase<G> &gyr, const Eigen::MatrixBase<A> &acc, Eigen::VectorXd *spread = nullptr,
+        Eigen::VectorXd *health = nullptr) {
+        return update_batch(gyr, acc, Eigen::Matrix<double, 0, 3>(), spread, health);
     }
 #endif
     /// The orientation estimate (sensor -> world ENU, w >= 0); an Eigen::Quaterniond where Eigen
@@ -1225,6 +1269,17 @@ public:
     }
     /// The total angular spread (rad), ~ the RMS orientation error when calibrated.
     double uncertainty() const { return angular_spread()[3]; }
+    /// The health readout (bingham_ahrs_health()): `score` about 1 when the sensors agree with
+    /// the model, above BINGHAM_AHRS_HEALTH_THRESHOLD (10) an input mistake is likely (gyroscope
+    /// in deg/s, wrong sample time); `mag_rejected` near 1: magnetometer disturbed or axes wrong;
+    /// `mag_dip` (rad, positive below the horizon) of the wrong sign for the place: a flipped
+    /// accelerometer.
+    bingham_ahrs_health_report health() const {
+        require("bingham::Ahrs::health");
+        bingham_ahrs_health_report h{};
+        detail::check(bingham_ahrs_health(a_, &h));
+        return h;
+    }
     /// The gyroscope bias estimate (rad/s, sensor frame).
     std::array<double, 3> gyro_bias() const {
         require("bingham::Ahrs::gyro_bias");

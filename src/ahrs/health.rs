@@ -18,8 +18,14 @@
 //! Each is averaged per degree of freedom over [`HEALTH_TIME`] (an exponential average over
 //! the corrections, which come every 20 ms at every sample rate), so that one burst of linear
 //! acceleration does not count as a mistake while a wrong model, which disagrees all the time,
-//! does. The score is the larger of the two averages: about 1 when the model holds, and the
-//! readout flags the input when it exceeds [`HEALTH_THRESHOLD`].
+//! does. A third average does not depend on the state's spread: the gravity score
+//! `((|ā| − g)/acc_reject)²`. The accelerometer is low-passed in the frame the gyroscope
+//! integrates, where gravity keeps its norm only if the gyroscope turns that frame as the
+//! sensor turns; a gain error (a gyroscope in °/s, a wrong sample time) turns gravity in that
+//! frame and its average shrinks — while the rate-dependent process noise such a mistake
+//! inflates would let the state's spread explain any innovation. The score is the largest of
+//! the three averages: about 1 or less when the model holds, and the readout flags the input
+//! when it exceeds [`HEALTH_THRESHOLD`].
 //!
 //! What the score cannot see, the readout reports directly: the fraction of magnetometer
 //! samples the disturbance test refused over the last [`HEALTH_TIME`] (a magnetometer whose
@@ -34,33 +40,36 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::bias::pinv;
 
-/// The time constant (s) of the health averages: long enough that one burst of linear
+/// The time constant (s) of the health averages (`BINGHAM_AHRS_HEALTH_TIME` in C): long enough that one burst of linear
 /// acceleration (a fraction of a second) or a short magnetic disturbance does not raise the
 /// score past the threshold, short enough to flag a wrong input within seconds of motion.
 pub const HEALTH_TIME: f64 = 5.0;
 
-/// The score above which the readout flags the input as inconsistent with the model:
-/// the average normalized innovation is this many times what the model predicts. Measured
-/// (tests/ahrs_health.rs, docs/accuracy.md § "AHRS health"): correct input stays below it
-/// on the simulated suite and the BROAD recordings; each of the input mistakes the test makes
-/// exceeds it within 10 s of motion.
+/// The score above which the readout flags the input as inconsistent with the model
+/// (`BINGHAM_AHRS_HEALTH_THRESHOLD` in C): the average normalized innovation is this many
+/// times what the model predicts. Measured (python/tests/test_health.py, docs/accuracy.md
+/// "AHRS health"): correct input stays at or below 2.5 on the simulated suite and the BROAD
+/// recordings; a gyroscope in °/s and a sample time 2× or 0.5× the truth exceed it within
+/// 10 s of motion.
 pub const HEALTH_THRESHOLD: f64 = 10.0;
 
-/// The AHRS's health readout (`bingham_ahrs_health_report` in C): see the module `ahrs::health` for
-/// the definitions. All values finite; before the first correction all zero.
+/// The AHRS's health readout (`bingham_ahrs_health_report` in C, from `bingham_ahrs_health()`):
+/// how well the sensors have agreed with the model over the last `BINGHAM_AHRS_HEALTH_TIME`
+/// (5 s). Definitions in docs/guide.md ("Health readout"), measured figures in
+/// docs/accuracy.md ("AHRS health"). All values finite; before the first correction all zero.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct AhrsHealth {
-    /// The larger of the tilt and heading scores: about 1 when the sensors agree with the
-    /// model; above `HEALTH_THRESHOLD` (10) the input is likely wrong (a gyroscope in °/s, a
-    /// wrong sample time, swapped magnetometer axes).
+    /// The largest of `gravity_score`, `tilt_score` and `heading_score`: about 1 or less when
+    /// the sensors agree with the model; above `BINGHAM_AHRS_HEALTH_THRESHOLD` (10) the input
+    /// is likely wrong (a gyroscope in °/s instead of rad/s, a wrong sample time).
     pub score: f64,
     /// The squared deviation of the low-passed accelerometer's norm from `gravity`, in units
-    /// of `acc_reject`, averaged over `HEALTH_TIME` (5 s).
+    /// of `acc_reject`, averaged over `BINGHAM_AHRS_HEALTH_TIME` (5 s).
     pub gravity_score: f64,
-    /// The normalized tilt innovation per degree of freedom, averaged over `HEALTH_TIME` (5 s).
+    /// The normalized tilt innovation per degree of freedom, averaged over `BINGHAM_AHRS_HEALTH_TIME` (5 s).
     pub tilt_score: f64,
-    /// The normalized heading innovation, averaged over `HEALTH_TIME` (5 s) of corrections
+    /// The normalized heading innovation, averaged over `BINGHAM_AHRS_HEALTH_TIME` (5 s) of corrections
     /// with a heading observation (0 without one).
     pub heading_score: f64,
     /// The angle (rad) between the predicted and the low-passed accelerometer's "up" at the
@@ -70,7 +79,7 @@ pub struct AhrsHealth {
     /// correction with a heading observation (0 without one).
     pub heading_innovation: f64,
     /// The fraction (0 to 1) of magnetometer samples the disturbance test refused, averaged
-    /// over `HEALTH_TIME` (5 s) of samples that carried a field (0 without any).
+    /// over `BINGHAM_AHRS_HEALTH_TIME` (5 s) of samples that carried a field (0 without any).
     pub mag_rejected: f64,
     /// The dip of the reference field (rad), positive when the field points below the
     /// horizon (north of the magnetic equator); 0 without a reference (`has_mag_reference`

@@ -463,7 +463,7 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                 initialized |= done > 0;
             } else if r < 9 {
                 // --- getters with NULL / misaligned arguments
-                let which = rng.below(6);
+                let which = rng.below(7);
                 let null_handle = rng.chance(0.5);
                 let mut buf = Buf::sentinel(16);
                 let mut buf2 = Buf::sentinel(4);
@@ -492,6 +492,7 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                             "bingham_ahrs_mag_latency_estimate",
                             bingham_ahrs_mag_latency_estimate(ap, o1),
                         ),
+                        5 => ("bingham_ahrs_health", bingham_ahrs_health(ap, o1.cast())),
                         _ => (
                             "bingham_ahrs_angular_spread",
                             bingham_ahrs_angular_spread(ap, o1),

@@ -1,6 +1,7 @@
 //! The filter: random call sequences (the body-frame steps, the vector observation and the
 //! world-frame steps `bingham_filter_predict_world` / `_update_world` /
-//! `_log_likelihood_world`, whose `u = NULL` is the identity, not an error).
+//! `_log_likelihood_world`, whose `u = NULL` is the identity, not an error; the surprise
+//! `bingham_filter_surprise`, finite and ≥ 0 on success).
 //!
 //! One case is one sequence: a filter (created with random, sometimes hostile, parameters) and a
 //! "twin" created alike that receives only the calls that succeeded on the first. After every call:
@@ -211,6 +212,7 @@ unsafe fn filter_call(
             12 => bingham_filter_predict_world(fp, p[0], p[1], p[2]),
             13 => bingham_filter_update_world(fp, p[0], p[1], p[2]),
             14 => bingham_filter_log_likelihood_world(fp, p[0], p[1], p[2], o(0)),
+            15 => bingham_filter_surprise(fp, p[0], p[1], p[2], o(0)),
             5 => bingham_filter_get_state(fp, o(0), o(1)),
             6 => bingham_filter_mode(fp, o(0)),
             7 => {
@@ -249,7 +251,7 @@ unsafe fn filter_call(
     st
 }
 
-const FILTER_OPS: [&str; 15] = [
+const FILTER_OPS: [&str; 16] = [
     "bingham_filter_predict",
     "bingham_filter_predict_rotation",
     "bingham_filter_update",
@@ -265,16 +267,17 @@ const FILTER_OPS: [&str; 15] = [
     "bingham_filter_predict_world",
     "bingham_filter_update_world",
     "bingham_filter_log_likelihood_world",
+    "bingham_filter_surprise",
 ];
 
 /// The operations that must not change the state (const handle, or outputs only).
 fn read_only(op: usize) -> bool {
-    matches!(op, 4..=8 | 10 | 11 | 14)
+    matches!(op, 4..=8 | 10 | 11 | 14 | 15)
 }
 
 /// The operations with output arrays or pointer outputs (which the harness may make NULL).
 fn has_outputs(op: usize) -> bool {
-    matches!(op, 4..=8 | 10 | 11 | 14)
+    matches!(op, 4..=8 | 10 | 11 | 14 | 15)
 }
 
 /// `bingham_filter_predict_world` with `u = NULL`: the identity control, a valid call.
@@ -444,7 +447,7 @@ fn filter_sequence(
     let steps = 1 + rng.below(40);
     let mut result = Ok(());
     for step in 0..steps {
-        let op = match rng.below(31) {
+        let op = match rng.below(32) {
             0..=5 => 0,
             6..=7 => 1,
             8..=13 => 2,
@@ -458,6 +461,7 @@ fn filter_sequence(
             25..=26 => 12,
             27..=28 => 13,
             29 => 14,
+            31 => 15,
             _ => {
                 if rng.chance(0.5) {
                     7
@@ -486,7 +490,7 @@ fn filter_sequence(
                 attack: FAttack::None,
                 desc: String::new(),
             },
-            2 | 4 | 13 | 14 => FArgs {
+            2 | 4 | 13 | 14 | 15 => FArgs {
                 arrays: vec![filter_measurement(&mut rng, &sm, d), noise.0, noise.1],
                 kinds: vec![U, M, Z],
                 attack: FAttack::None,
@@ -527,7 +531,7 @@ fn filter_sequence(
         }
         // outputs: array outputs count as argument indices after the inputs
         let out_kinds: &[Kind] = match op {
-            4 | 10 | 14 => &[One],
+            4 | 10 | 14 | 15 => &[One],
             5 => &[DD, D],
             6 | 11 => &[D],
             _ => &[],
@@ -663,6 +667,13 @@ fn filter_sequence(
                 let v = outs[0].values()[0];
                 if !v.is_finite() || !outs[0].guards_ok() {
                     result = fail(format!("log-likelihood {v}"));
+                    break;
+                }
+            }
+            15 => {
+                let v = outs[0].values()[0];
+                if !v.is_finite() || v < 0.0 || !outs[0].guards_ok() {
+                    result = fail(format!("surprise {v}"));
                     break;
                 }
             }
