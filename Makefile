@@ -122,9 +122,14 @@ rust-test:
 # The pytest suite (python/tests/) run by the venv's Python against the INSTALLED package (from
 # python/tests/, so the checkout's python/bingham/ is not on the path; BINGHAM_LIB unset, so the
 # bundled library is loaded): fails when the package does not build or install.
+# Then the package's type annotations: mypy --strict on python/bingham (mypy installed into the
+# venv when missing).
 python-test: venv
 	@$(VENV_PYTHON) -c 'import pytest' 2>/dev/null || $(VENV_PYTHON) -m pip install pytest
 	cd python/tests && env -u BINGHAM_LIB $(VENV_PYTHON) -m pytest -q -p no:cacheprovider
+	@$(VENV_PYTHON) -c 'import mypy' 2>/dev/null || \
+	  $(VENV_PYTHON) -m pip install --disable-pip-version-check --progress-bar off mypy
+	$(VENV_PYTHON) -m mypy --strict --no-incremental python/bingham
 
 # The Python package in a virtual environment ($(TARGET_DIR)/venv), for python-test, demo and
 # broad: `pip install ./python` with BINGHAM_PREBUILT_LIB ships the libbingham.so that `build`

@@ -52,7 +52,7 @@ class AhrsHealth(ctypes.Structure):
     ]
 
     def __repr__(self) -> str:
-        body = ", ".join(f"{name}={getattr(self, name)!r}" for name, _ in self._fields_)
+        body = ", ".join(f"{name}={getattr(self, name)!r}" for name, *_ in self._fields_)
         return f"AhrsHealth({body})"
 
 
