@@ -11,6 +11,7 @@ import numpy as np
 
 from ._arrays import Array, ArrayLike, _in, _ptr
 from .errors import Status, _check, last_error_message
+from ._handle import _Handle
 from ._library import lib
 
 __all__ = ["AhrsParams", "AhrsHealth", "Ahrs", "LATENCY_ESTIMATE", "HEALTH_THRESHOLD", "HEALTH_TIME"]
@@ -204,7 +205,7 @@ def _rows3(a: ArrayLike, name: str, n: Optional[int] = None) -> Array:
     return arr
 
 
-class Ahrs:
+class Ahrs(_Handle):
     """The Bingham AHRS (gyroscope, accelerometer, optional magnetometer), owning a
     ``bingham_ahrs`` handle. Orientation q (w, x, y, z) maps sensor to world ENU.
     Units: rad/s, m/s² (+g up at rest), any magnetometer unit.
@@ -219,6 +220,9 @@ class Ahrs:
     ``BINGHAM_AHRS_MAX_SAMPLE_TIME``). An unknown
     override raises :class:`TypeError`, a value the library refuses :class:`BinghamError`.
     """
+
+    _free = "bingham_ahrs_free"
+    _what = "AHRS"
 
     def __init__(self, sample_time: float, params: Optional[AhrsParams] = None, **overrides: float) -> None:
         sample_time = float(sample_time)
@@ -251,29 +255,6 @@ class Ahrs:
         and at least 1 (the sample time at most 1 s), else :class:`ValueError`."""
         p = AhrsParams.from_rate(hz)
         return cls(p.sample_time, p, **overrides)
-
-    def close(self) -> None:
-        """Releases the handle (idempotent)."""
-        if getattr(self, "_handle", None) is not None:
-            lib().bingham_ahrs_free(self._handle)
-            self._handle = None
-
-    def __del__(self) -> None:
-        try:
-            self.close()
-        except Exception:
-            pass
-
-    def __enter__(self) -> "Ahrs":
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-    def _h(self) -> ctypes.c_void_p:
-        if self._handle is None:
-            raise ValueError("the AHRS has been closed")
-        return self._handle
 
     def update(self, gyr: ArrayLike, acc: ArrayLike, mag: Optional[ArrayLike] = None) -> None:
         """One sample (3-vectors; ``mag`` may be None). Per channel: NaN (or ±Inf) in ``acc``

@@ -12,6 +12,7 @@ import numpy as np
 from ._arrays import Array, ArrayLike, _dist, _in, _ptr
 from ._callback import _Callback
 from .errors import _check
+from ._handle import _Handle
 from ._library import _LOG_LIKELIHOOD_FN, _SIZE, _TRANSITION_FN, lib
 
 __all__ = ["Filter", "NonlinearReport", "PREDICT_TOLERANCE", "UPDATE_TOLERANCE"]
@@ -86,7 +87,7 @@ def _report(r: _Report) -> NonlinearReport:
     )
 
 
-class Filter:
+class Filter(_Handle):
     """The recursive Bingham filter (d = 2: axes as ``(re, im)``; d = 4: unit quaternions,
     scalar first), owning a ``bingham_filter`` handle.
 
@@ -101,6 +102,9 @@ class Filter:
     The handle is released by :meth:`close`, by leaving a ``with`` block, or when the object
     is garbage collected.
     """
+
+    _free = "bingham_filter_free"
+    _what = "filter"
 
     def __init__(self, m0: ArrayLike, z0: ArrayLike) -> None:
         d, m0, z0 = _dist(m0, z0, ("m0", "z0"))
@@ -119,31 +123,16 @@ class Filter:
         return f
 
     def _h(self) -> ctypes.c_void_p:
-        if self._handle is None:
-            raise ValueError("the filter has been closed")
+        handle = super()._h()
         if self._busy:
             raise ValueError("the filter is in a nonlinear step: its callback must not use it")
-        return self._handle
+        return handle
 
     def close(self) -> None:
         """Releases the handle (idempotent)."""
         if getattr(self, "_busy", False):
             raise ValueError("the filter is in a nonlinear step: its callback must not close it")
-        if getattr(self, "_handle", None) is not None:
-            lib().bingham_filter_free(self._handle)
-            self._handle = None
-
-    def __del__(self) -> None:
-        try:
-            self.close()
-        except Exception:  # interpreter shutdown: the library may be gone already
-            pass
-
-    def __enter__(self) -> "Filter":
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+        super().close()
 
     def clone(self) -> "Filter":
         """An independent copy (state and cached noise parameters)."""

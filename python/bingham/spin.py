@@ -11,6 +11,7 @@ import numpy as np
 
 from ._arrays import Array, ArrayLike, _in, _ptr
 from .errors import _check
+from ._handle import _Handle
 from ._library import lib
 
 __all__ = ["SpinFilter"]
@@ -20,7 +21,7 @@ def _dist4(m: ArrayLike, z: ArrayLike, names: Tuple[str, str]) -> Tuple[Array, A
     return _in(m, names[0], (4, 4)), _in(z, names[1], (4,))
 
 
-class SpinFilter:
+class SpinFilter(_Handle):
     """The second-order quaternion Bingham filter (Glover & Kaelbling 2013): the orientation
     ``x`` and the spin ``v`` (the rotation per time step), unit quaternions scalar first
     ``(w, x, y, z)``, owning a ``bingham_spin_filter`` handle.
@@ -42,6 +43,9 @@ class SpinFilter:
     :meth:`close`, by leaving a ``with`` block, or when the object is garbage collected.
     """
 
+    _free = "bingham_spin_filter_free"
+    _what = "spin filter"
+
     def __init__(self, m_x: ArrayLike, z_x: ArrayLike, m_v: ArrayLike, z_v: ArrayLike) -> None:
         m_x, z_x = _dist4(m_x, z_x, ("m_x", "z_x"))
         m_v, z_v = _dist4(m_v, z_v, ("m_v", "z_v"))
@@ -54,29 +58,6 @@ class SpinFilter:
         f = cls.__new__(cls)
         f._handle = handle
         return f
-
-    def _h(self) -> ctypes.c_void_p:
-        if self._handle is None:
-            raise ValueError("the spin filter has been closed")
-        return self._handle
-
-    def close(self) -> None:
-        """Releases the handle (idempotent)."""
-        if getattr(self, "_handle", None) is not None:
-            lib().bingham_spin_filter_free(self._handle)
-            self._handle = None
-
-    def __del__(self) -> None:
-        try:
-            self.close()
-        except Exception:  # interpreter shutdown: the library may be gone already
-            pass
-
-    def __enter__(self) -> "SpinFilter":
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
 
     def clone(self) -> "SpinFilter":
         """An independent copy (state and cached noise parameters)."""
