@@ -28,6 +28,16 @@
  *   message naming the field; bingham_ahrs_mag_latency_estimate: NULLs, NOT_CONVERGED (output
  *   untouched) before informative motion, then the delay of a noise-free simulated spin with a
  *   changing rate and the magnetometer two samples late.
+ * - the health readout (bingham_ahrs_health): all zero before the first sample; after 5 s of the
+ *   slow turn every field finite, score == max(gravity_score, tilt_score, heading_score),
+ *   0 <= mag_rejected <= 1, a reference with the dip of the simulated field (atan(40/20) below
+ *   the horizon, positive; negative with the accelerometer's sign flipped), below
+ *   BINGHAM_AHRS_HEALTH_THRESHOLD; without a magnetometer no reference, no heading score;
+ *   NULL `a` / `out` refused with the output untouched;
+ * - bingham_ahrs_update_batch_health (from a fresh AHRS and mid-stream, with spread and health
+ *   each present or NULL, mag NULL): quaternions bit for bit the single updates', spread[k] the
+ *   total spread and health[k] bingham_ahrs_health's score after sample k; a NaN gyroscope
+ *   entry in sample 5 stops it there (rows 5.. untouched); NULLs refused, nothing written.
  *
  * bingham_ahrs_params is filled with bingham_ahrs_params_default() only (its fields may change);
  * only sample_time, the latencies, bias_std and gyro_scale_noise are set by hand.
@@ -722,6 +732,232 @@ static void test_ahrs_batch(void) {
     }
 }
 
+/* ---- the health readout ------------------------------------------------------------------------ */
+
+static void hsnap(const bingham_ahrs *a, bingham_ahrs_health_report *h) {
+    memset(h, 0, sizeof *h);
+    CHECK_OK(bingham_ahrs_health(a, h));
+}
+
+/* Every field finite, the score the largest of the three averages, the rejected fraction in
+ * [0, 1], the innovations non-negative where they are angles. */
+static void check_health_consistent(const bingham_ahrs_health_report *h) {
+    const double v[8] = {h->score,           h->gravity_score,      h->tilt_score,   h->heading_score,
+                         h->tilt_innovation, h->heading_innovation, h->mag_rejected, h->mag_dip};
+    CHECK(all_finite(v, 8));
+    CHECK(h->score == fmax(h->gravity_score, fmax(h->tilt_score, h->heading_score)));
+    CHECK(h->gravity_score >= 0.0 && h->tilt_score >= 0.0 && h->heading_score >= 0.0);
+    CHECK(h->tilt_innovation >= 0.0 && h->tilt_innovation <= PI);
+    CHECK(h->mag_rejected >= 0.0 && h->mag_rejected <= 1.0);
+    CHECK(h->has_mag_reference == 0 || h->has_mag_reference == 1);
+}
+
+static void test_ahrs_health(void) {
+    const char *fn = "bingham_ahrs_health";
+    /* the field of sample(): world (0, 20, -40) in ENU, 40 down and 20 north: a dip of
+     * atan(40 / 20) below the horizon (positive) */
+    const double dip = atan2(40.0, 20.0);
+    bingham_ahrs_health_report h;
+    bingham_ahrs *a = new_ahrs(0.01);
+    if (!a) return;
+    /* before the first sample: all zero, no reference */
+    fill(&h, sizeof h);
+    CHECK_OK(bingham_ahrs_health(a, &h));
+    CHECK(h.score == 0.0 && h.gravity_score == 0.0 && h.tilt_score == 0.0 && h.heading_score == 0.0);
+    CHECK(h.tilt_innovation == 0.0 && h.heading_innovation == 0.0 && h.mag_rejected == 0.0 && h.mag_dip == 0.0);
+    CHECK(h.has_mag_reference == 0);
+    /* NULLs: refused, the output untouched, the AHRS unchanged */
+    astate s0 = asnap(a);
+    fill(&h, sizeof h);
+    CHECK_STATUS(bingham_ahrs_health(NULL, &h), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "a");
+    CHECK(untouched(&h, sizeof h));
+    CHECK_STATUS(bingham_ahrs_health(a, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "out");
+    CHECK(same_state(s0, asnap(a)));
+
+    /* 5 s of the slow turn with a magnetometer */
+    double g[3], acc[3], mag[3];
+    for (int k = 0; k < 500; ++k) {
+        sample(k, g, acc, mag);
+        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+    }
+    astate s1 = asnap(a);
+    hsnap(a, &h);
+    check_health_consistent(&h);
+    CHECK(same_state(s1, asnap(a))); /* a readout does not change the AHRS */
+    CHECK(h.has_mag_reference == 1);
+    if (fabs(h.mag_dip - dip) > 0.01) fprintf(stderr, "    mag_dip %.6f, field's dip %.6f\n", h.mag_dip, dip);
+    CHECK(h.mag_dip > 0.0 && fabs(h.mag_dip - dip) <= 0.01);
+    CHECK(h.tilt_score > 0.0);      /* corrections have happened */
+    CHECK(h.heading_score > 0.0);   /* ... with a heading observation */
+    CHECK(h.mag_rejected <= 0.5);   /* a clean, constant field: mostly used */
+    /* correct input: below the documented threshold */
+    if (!(h.score < BINGHAM_AHRS_HEALTH_THRESHOLD)) fprintf(stderr, "    score %g\n", h.score);
+    CHECK(h.score < BINGHAM_AHRS_HEALTH_THRESHOLD);
+    /* a second readout: identical */
+    bingham_ahrs_health_report h2;
+    hsnap(a, &h2);
+    CHECK(memcmp(&h, &h2, sizeof h) == 0);
+    /* errors after samples: output untouched */
+    fill(&h2, sizeof h2);
+    CHECK_STATUS(bingham_ahrs_health(NULL, &h2), BINGHAM_ERR_NULL_ARGUMENT);
+    CHECK(untouched(&h2, sizeof h2));
+    bingham_ahrs_free(a);
+
+    /* without a magnetometer: no reference, no heading, nothing rejected */
+    a = new_ahrs(0.01);
+    if (!a) return;
+    for (int k = 0; k < 500; ++k) {
+        sample(k, g, acc, mag);
+        CHECK_OK(bingham_ahrs_update(a, g, acc, NULL));
+    }
+    hsnap(a, &h);
+    check_health_consistent(&h);
+    CHECK(h.has_mag_reference == 0 && h.mag_dip == 0.0 && h.heading_score == 0.0 && h.heading_innovation == 0.0);
+    CHECK(h.mag_rejected == 0.0 && h.tilt_score > 0.0 && h.score == h.tilt_score);
+    bingham_ahrs_free(a);
+
+    /* a flipped accelerometer (gravity instead of specific force): the dip changes sign */
+    a = new_ahrs(0.01);
+    if (!a) return;
+    for (int k = 0; k < 500; ++k) {
+        sample(k, g, acc, mag);
+        for (int i = 0; i < 3; ++i) acc[i] = -acc[i];
+        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+    }
+    hsnap(a, &h);
+    check_health_consistent(&h);
+    if (fabs(h.mag_dip + dip) > 0.01) fprintf(stderr, "    flipped: mag_dip %.6f\n", h.mag_dip);
+    CHECK(h.has_mag_reference == 1 && h.mag_dip < 0.0 && fabs(h.mag_dip + dip) <= 0.01);
+    bingham_ahrs_free(a);
+}
+
+static void test_ahrs_batch_health(void) {
+    const char *fn = "bingham_ahrs_update_batch_health";
+    enum { N = 400 };
+    static double g[3 * N], acc[3 * N], mag[3 * N], quat[4 * N], spread[N], health[N];
+    for (int k = 0; k < N; ++k) {
+        sample(k, g + 3 * k, acc + 3 * k, mag + 3 * k);
+        g[3 * k] += 0.5 * sin(0.05 * k); /* some motion */
+        if (k % 7 == 3) mag[3 * k + 1] = NAN; /* no magnetometer sample */
+    }
+    /* from a fresh AHRS (the first samples included) and from a clone of one 200 samples in:
+     * every row equal to single updates and the readout after them */
+    for (int from_clone = 0; from_clone < 2; ++from_clone)
+        for (int outputs = 0; outputs < 4; ++outputs) { /* bit 0: spread, bit 1: health */
+            bingham_ahrs *a = new_ahrs(0.01), *ref = NULL;
+            if (!a) return;
+            if (from_clone)
+                for (int k = 0; k < 200; ++k) CHECK_OK(bingham_ahrs_update(a, g + 3 * k, acc + 3 * k, mag + 3 * k));
+            CHECK_OK(bingham_ahrs_clone(a, &ref));
+            if (!ref) return;
+            const int n = from_clone ? N - 200 : N, off = from_clone ? 200 : 0;
+            double *sp_out = outputs & 1 ? spread : NULL, *h_out = outputs & 2 ? health : NULL;
+            fill(quat, sizeof quat);
+            fill(spread, sizeof spread);
+            fill(health, sizeof health);
+            CHECK_OK(bingham_ahrs_update_batch_health(a, (size_t)n, g + 3 * off, acc + 3 * off, mag + 3 * off, quat,
+                                                      sp_out, h_out));
+            int q_same = 1, sp_same = 1, h_same = 1, h_zero_first = 1;
+            for (int k = 0; k < n; ++k) {
+                double q[4], sp[4];
+                bingham_ahrs_health_report r;
+                CHECK_OK(bingham_ahrs_update(ref, g + 3 * (off + k), acc + 3 * (off + k), mag + 3 * (off + k)));
+                CHECK_OK(bingham_ahrs_quaternion(ref, q));
+                CHECK_OK(bingham_ahrs_angular_spread(ref, sp));
+                CHECK_OK(bingham_ahrs_health(ref, &r));
+                q_same &= memcmp(q, quat + 4 * k, sizeof q) == 0;
+                if (sp_out) sp_same &= spread[k] == sp[3];
+                if (h_out) h_same &= memcmp(&health[k], &r.score, sizeof(double)) == 0;
+                if (!from_clone && k == 0) h_zero_first = r.score == 0.0; /* no correction yet */
+            }
+            CHECK(q_same && sp_same && h_same && h_zero_first);
+            if (!sp_out) CHECK(untouched(spread, sizeof spread));
+            if (!h_out) CHECK(untouched(health, sizeof health));
+            if (h_out) CHECK(all_finite(health, (size_t)n) && health[n - 1] > 0.0);
+            CHECK(untouched(quat + 4 * n, 4 * (size_t)(N - n) * sizeof(double)));
+            /* the AHRS holds the state and the readout after the last sample */
+            bingham_ahrs_health_report ha, hr;
+            hsnap(a, &ha);
+            hsnap(ref, &hr);
+            CHECK(same_state(asnap(a), asnap(ref)) && memcmp(&ha, &hr, sizeof ha) == 0);
+            if (h_out) CHECK(health[n - 1] == ha.score);
+            bingham_ahrs_free(a);
+            bingham_ahrs_free(ref);
+        }
+    /* mag = NULL: equal to single updates without a magnetometer */
+    {
+        bingham_ahrs *a = new_ahrs(0.01), *ref = new_ahrs(0.01);
+        if (!a || !ref) return;
+        CHECK_OK(bingham_ahrs_update_batch_health(a, 100, g, acc, NULL, quat, NULL, health));
+        int h_same = 1;
+        for (int k = 0; k < 100; ++k) {
+            bingham_ahrs_health_report r;
+            CHECK_OK(bingham_ahrs_update(ref, g + 3 * k, acc + 3 * k, NULL));
+            CHECK_OK(bingham_ahrs_health(ref, &r));
+            h_same &= health[k] == r.score && r.has_mag_reference == 0;
+        }
+        CHECK(h_same && same_state(asnap(a), asnap(ref)));
+        bingham_ahrs_free(a);
+        bingham_ahrs_free(ref);
+    }
+    /* a NaN gyroscope entry in sample 5: refused there, rows 0..4 written, the rest untouched */
+    {
+        bingham_ahrs *a = new_ahrs(0.01), *ref = new_ahrs(0.01);
+        if (!a || !ref) return;
+        double saved = g[3 * 5 + 2];
+        g[3 * 5 + 2] = NAN;
+        fill(quat, sizeof quat);
+        fill(spread, sizeof spread);
+        fill(health, sizeof health);
+        CHECK_STATUS(bingham_ahrs_update_batch_health(a, 10, g, acc, mag, quat, spread, health),
+                     BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg(fn, "sample 5");
+        g[3 * 5 + 2] = saved;
+        int rows_same = 1;
+        for (int k = 0; k < 5; ++k) {
+            double q[4];
+            bingham_ahrs_health_report r;
+            CHECK_OK(bingham_ahrs_update(ref, g + 3 * k, acc + 3 * k, mag + 3 * k));
+            CHECK_OK(bingham_ahrs_quaternion(ref, q));
+            CHECK_OK(bingham_ahrs_health(ref, &r));
+            rows_same &= memcmp(q, quat + 4 * k, sizeof q) == 0 && health[k] == r.score;
+        }
+        CHECK(rows_same);
+        CHECK(untouched(quat + 4 * 5, sizeof quat - 4 * 5 * sizeof(double)));
+        CHECK(untouched(spread + 5, sizeof spread - 5 * sizeof(double)));
+        CHECK(untouched(health + 5, sizeof health - 5 * sizeof(double)));
+        CHECK(same_state(asnap(a), asnap(ref)));
+        bingham_ahrs_free(a);
+        bingham_ahrs_free(ref);
+    }
+    /* NULLs: refused, nothing written, the AHRS unchanged */
+    {
+        bingham_ahrs *a = new_ahrs(0.01);
+        if (!a) return;
+        astate s = asnap(a);
+        fill(quat, sizeof quat);
+        fill(spread, sizeof spread);
+        fill(health, sizeof health);
+        CHECK_STATUS(bingham_ahrs_update_batch_health(NULL, 10, g, acc, mag, quat, spread, health),
+                     BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "a");
+        CHECK_STATUS(bingham_ahrs_update_batch_health(a, 10, NULL, acc, mag, quat, spread, health),
+                     BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "gyr");
+        CHECK_STATUS(bingham_ahrs_update_batch_health(a, 10, g, NULL, mag, quat, spread, health),
+                     BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "acc");
+        CHECK_STATUS(bingham_ahrs_update_batch_health(a, 10, g, acc, mag, NULL, spread, health),
+                     BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "quat");
+        CHECK(untouched(quat, sizeof quat) && untouched(spread, sizeof spread) && untouched(health, sizeof health));
+        CHECK(same_state(s, asnap(a)));
+        bingham_ahrs_free(a);
+    }
+}
+
 /* ---- the gyroscope bias's uncertainty ------------------------------------------------------------ */
 
 static void test_ahrs_bias_uncertainty(void) {
@@ -918,6 +1154,8 @@ int main(void) {
     test_ahrs_params_and_new();
     test_ahrs_update();
     test_ahrs_batch();
+    test_ahrs_health();
+    test_ahrs_batch_health();
     test_ahrs_bias_uncertainty();
     test_ahrs_latency();
     return check_summary("ahrs_api");

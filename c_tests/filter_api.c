@@ -13,6 +13,16 @@
  * - inputs placed flush against an inaccessible page: nothing is read beyond d (d*d) entries;
  * - clones evolve exactly like the original; handles on different threads are independent;
  *   const functions may run concurrently on one handle.
+ * - bingham_filter_surprise (d = 4 and d = 2, a noise whose mode is neither the identity nor in
+ *   the last column): 2 (ll(y_hat) - ll(y)) from bingham_filter_log_likelihood, y_hat the state's
+ *   mode times the noise's mode (the group product written out here), to 1e-9 relative; 0 at
+ *   y_hat; growing with the distance from y_hat; the same for -y; errors leave the output and
+ *   state alone;
+ * - bingham_filter_update_gated: a near measurement under the 0.1 % chi-square level (16.27,
+ *   d = 2: 10.83) applied, the state bit for bit bingham_filter_update's on a clone; a far one
+ *   gated out with BINGHAM_OK and the state bit for bit unchanged; accepted iff
+ *   surprise <= max_surprise (at the boundary and one ulp below), INFINITY no gate; NaN or
+ *   negative max_surprise -> INVALID_ARGUMENT, NULL outputs -> NULL_ARGUMENT, outputs untouched.
  */
 #define _DEFAULT_SOURCE 1
 #include <pthread.h>
@@ -400,6 +410,221 @@ static void test_sharp(const scenario *s) {
     bingham_filter_free(f);
 }
 
+/* ---- surprise and the gated update ------------------------------------------------------------- */
+
+/* The group product: Hamilton's for quaternions (w, x, y, z), complex for d = 2. */
+static void group_mul(size_t d, const double *a, const double *b, double *out) {
+    double r[4];
+    if (d == 2) {
+        r[0] = a[0] * b[0] - a[1] * b[1];
+        r[1] = a[0] * b[1] + a[1] * b[0];
+    } else {
+        r[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+        r[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+        r[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+        r[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+    }
+    memcpy(out, r, d * sizeof(double));
+}
+
+/* An orthogonal d x d matrix (row-major): the identity turned by Givens rotations in the planes
+ * (i, i+1) by the angles phase + 0.4 i. */
+static void givens_orthogonal(size_t d, double phase, double *m) {
+    size_t i, r;
+    memset(m, 0, d * d * sizeof *m);
+    for (i = 0; i < d; ++i) m[i * d + i] = 1.0;
+    for (i = 0; i + 1 < d; ++i) {
+        double c = cos(phase + 0.4 * (double)i), s = sin(phase + 0.4 * (double)i);
+        for (r = 0; r < d; ++r) {
+            double x = m[r * d + i], y = m[r * d + i + 1];
+            m[r * d + i] = c * x - s * y;
+            m[r * d + i + 1] = s * x + c * y;
+        }
+    }
+}
+
+static void normalize_vec(double *v, size_t d) {
+    double n = 0;
+    size_t i;
+    for (i = 0; i < d; ++i) n += v[i] * v[i];
+    n = sqrt(n);
+    for (i = 0; i < d; ++i) v[i] /= n;
+}
+
+/* 2 (ll(y_hat) - ll(y)) clamped at 0, from bingham_filter_log_likelihood. */
+static double surprise_from_ll(const bingham_filter *f, const double *y_hat, const double *y, const double *mv,
+                               const double *zv) {
+    double l_hat = 0, l_y = 0, s;
+    CHECK_OK(bingham_filter_log_likelihood(f, y_hat, mv, zv, &l_hat));
+    CHECK_OK(bingham_filter_log_likelihood(f, y, mv, zv, &l_y));
+    s = 2.0 * (l_hat - l_y);
+    return s > 0.0 ? s : 0.0;
+}
+
+static void test_surprise(size_t d) {
+    const char *fs = "bingham_filter_surprise", *fg = "bingham_filter_update_gated";
+    const double max_s = d == 4 ? 16.27 : 10.83; /* chi-square(d - 1), 0.1 % */
+    size_t i, top;
+    double m0[16], z0[4], mv[16], zv[4], x_hat[4], v_hat[4], y_hat[4], y[4], dq[4], s = 0, s2 = 0, expect;
+    bingham_filter *f = NULL, *g = NULL;
+    snapshot before;
+
+    /* a state with a non-trivial mode; a noise whose mode is not the identity, its largest
+     * concentration (0) not in the last place */
+    givens_orthogonal(d, 0.3, m0);
+    givens_orthogonal(d, -0.7, mv);
+    if (d == 4) {
+        const double z0v[4] = {-4000, -2500, -1200, 0}, zvv[4] = {-3000, 0, -6000, -4500};
+        memcpy(z0, z0v, sizeof z0);
+        memcpy(zv, zvv, sizeof zv);
+    } else {
+        const double z0v[2] = {-3000, 0}, zvv[2] = {0, -5000};
+        memcpy(z0, z0v, 2 * sizeof(double));
+        memcpy(zv, zvv, 2 * sizeof(double));
+    }
+    CHECK_OK(bingham_filter_new(d, m0, z0, &f));
+    if (!f) return;
+    /* y_hat = (state mode) (+) (noise mode): the columns of the largest concentrations */
+    CHECK_OK(bingham_filter_mode(f, x_hat));
+    for (top = 0, i = 1; i < d; ++i)
+        if (zv[i] > zv[top]) top = i;
+    for (i = 0; i < d; ++i) v_hat[i] = mv[i * d + top];
+    group_mul(d, x_hat, v_hat, y_hat);
+    normalize_vec(y_hat, d);
+
+    /* at y_hat itself: 0 */
+    CHECK_OK(bingham_filter_surprise(f, y_hat, mv, zv, &s));
+    CHECK(s >= 0.0 && s <= 1e-9);
+    /* measurements around y_hat, near and far: the log-likelihood difference */
+    for (i = 0; i < 6; ++i) {
+        double angle = 0.01 * (double)(i * i + 1); /* 0.01 .. 0.26 rad */
+        dq[0] = cos(angle / 2);
+        dq[1] = sin(angle / 2) * (d == 4 ? 0.48 : 1.0);
+        if (d == 4) dq[2] = sin(angle / 2) * 0.6, dq[3] = sin(angle / 2) * -0.64;
+        group_mul(d, y_hat, dq, y);
+        CHECK_OK(bingham_filter_surprise(f, y, mv, zv, &s));
+        expect = surprise_from_ll(f, y_hat, y, mv, zv);
+        CHECK(s >= 0.0);
+        CHECK(fabs(s - expect) <= 1e-9 * fabs(expect) + 1e-12);
+        if (i > 0) CHECK(s > s2); /* further away: more surprising */
+        s2 = s;
+        /* the sign of the measurement does not matter */
+        {
+            double ny[4], sn = 0;
+            size_t k;
+            for (k = 0; k < d; ++k) ny[k] = -y[k];
+            CHECK_OK(bingham_filter_surprise(f, ny, mv, zv, &sn));
+            CHECK_CLOSE(sn, s, 1e-9);
+        }
+    }
+    CHECK(s2 > max_s); /* 0.26 rad: well beyond the 0.1 % level */
+
+    /* surprise: errors, output untouched, state unchanged */
+    {
+        double out = 12345.0, yy[4];
+        CHECK_FAILS(f, bingham_filter_surprise(NULL, y, mv, zv, &out), BINGHAM_ERR_NULL_ARGUMENT, fs);
+        CHECK_FAILS(f, bingham_filter_surprise(f, NULL, mv, zv, &out), BINGHAM_ERR_NULL_ARGUMENT, fs);
+        CHECK_FAILS(f, bingham_filter_surprise(f, y, NULL, zv, &out), BINGHAM_ERR_NULL_ARGUMENT, fs);
+        CHECK_FAILS(f, bingham_filter_surprise(f, y, mv, NULL, &out), BINGHAM_ERR_NULL_ARGUMENT, fs);
+        CHECK_FAILS(f, bingham_filter_surprise(f, y, mv, zv, NULL), BINGHAM_ERR_NULL_ARGUMENT, fs);
+        memcpy(yy, y, sizeof yy);
+        yy[1] = NAN;
+        CHECK_FAILS(f, bingham_filter_surprise(f, yy, mv, zv, &out), BINGHAM_ERR_INVALID_ARGUMENT, fs);
+        for (i = 0; i < d; ++i) yy[i] = y[i] * 1.01;
+        CHECK_FAILS(f, bingham_filter_surprise(f, yy, mv, zv, &out), BINGHAM_ERR_INVALID_ARGUMENT, fs);
+        CHECK(out == 12345.0);
+        /* reads exactly d, d*d, d entries */
+        CHECK_OK(bingham_filter_surprise(f, flush(y, d), mv, zv, &out));
+        CHECK_OK(bingham_filter_surprise(f, y, flush(mv, d * d), zv, &out));
+        CHECK_OK(bingham_filter_surprise(f, y, mv, flush(zv, d), &out));
+    }
+
+    /* the gated update: a near measurement (0.01 rad from y_hat) is applied, bit for bit
+     * bingham_filter_update on a clone */
+    dq[0] = cos(0.005);
+    dq[1] = sin(0.005);
+    if (d == 4) dq[1] = 0.0, dq[2] = sin(0.005), dq[3] = 0.0;
+    group_mul(d, y_hat, dq, y);
+    {
+        double sg = -1.0, s_ref = -2.0;
+        int32_t acc = 7;
+        CHECK_OK(bingham_filter_surprise(f, y, mv, zv, &s_ref));
+        CHECK(s_ref < max_s);
+        CHECK_OK(bingham_filter_clone(f, &g));
+        if (!g) return;
+        CHECK_OK(bingham_filter_update_gated(f, y, mv, zv, max_s, &sg, &acc));
+        CHECK(acc == 1 && sg == s_ref);
+        CHECK_OK(bingham_filter_update(g, y, mv, zv));
+        CHECK(same(snap(f), snap(g)));
+        bingham_filter_free(g);
+        g = NULL;
+    }
+    /* a far measurement (0.5 rad): gated out, BINGHAM_OK, the state bit for bit as before */
+    dq[0] = cos(0.25);
+    dq[1] = sin(0.25);
+    if (d == 4) dq[1] = sin(0.25) * 0.6, dq[2] = 0.0, dq[3] = sin(0.25) * 0.8;
+    CHECK_OK(bingham_filter_mode(f, x_hat));
+    group_mul(d, x_hat, v_hat, y_hat);
+    group_mul(d, y_hat, dq, y);
+    {
+        double sg = -1.0, s_ref = -2.0;
+        int32_t acc = 7;
+        CHECK_OK(bingham_filter_surprise(f, y, mv, zv, &s_ref));
+        CHECK(s_ref > max_s);
+        CHECK_CLOSE(s_ref, surprise_from_ll(f, y_hat, y, mv, zv), 1e-9);
+        before = snap(f);
+        CHECK_OK(bingham_filter_update_gated(f, y, mv, zv, max_s, &sg, &acc));
+        CHECK(acc == 0 && sg == s_ref);
+        CHECK(same(before, snap(f)));
+        /* the boundary: accepted iff surprise <= max_surprise */
+        CHECK_OK(bingham_filter_clone(f, &g));
+        if (!g) return;
+        acc = 7;
+        CHECK_OK(bingham_filter_update_gated(f, y, mv, zv, nextafter(s_ref, 0.0), &sg, &acc));
+        CHECK(acc == 0 && same(before, snap(f)));
+        CHECK_OK(bingham_filter_update_gated(f, y, mv, zv, s_ref, &sg, &acc));
+        CHECK(acc == 1 && sg == s_ref);
+        CHECK_OK(bingham_filter_update(g, y, mv, zv));
+        CHECK(same(snap(f), snap(g)));
+        /* INFINITY: no gate */
+        CHECK_OK(bingham_filter_set_state(f, before.m, before.z));
+        CHECK_OK(bingham_filter_set_state(g, before.m, before.z));
+        CHECK(same(snap(f), before));
+        acc = 7;
+        CHECK_OK(bingham_filter_update_gated(f, y, mv, zv, INFINITY, &sg, &acc));
+        CHECK(acc == 1 && sg == s_ref);
+        CHECK_OK(bingham_filter_update(g, y, mv, zv));
+        CHECK(same(snap(f), snap(g)));
+        bingham_filter_free(g);
+        g = NULL;
+    }
+
+    /* errors: NaN / negative max_surprise, NULLs, a bad measurement: outputs untouched (sentinel
+     * values), the state unchanged, the message naming the function */
+    {
+        const double bad_max[4] = {NAN, -1.0, -INFINITY, -1e-300};
+        double sg = 12345.0, yy[4];
+        int32_t acc = 0x5A5A5A5A;
+        for (i = 0; i < 4; ++i) {
+            CHECK_FAILS(f, bingham_filter_update_gated(f, y, mv, zv, bad_max[i], &sg, &acc),
+                        BINGHAM_ERR_INVALID_ARGUMENT, fg);
+            CHECK(last_error_names("max_surprise"));
+        }
+        CHECK_FAILS(f, bingham_filter_update_gated(f, y, mv, zv, max_s, NULL, &acc), BINGHAM_ERR_NULL_ARGUMENT, fg);
+        CHECK_FAILS(f, bingham_filter_update_gated(f, y, mv, zv, max_s, &sg, NULL), BINGHAM_ERR_NULL_ARGUMENT, fg);
+        CHECK_FAILS(f, bingham_filter_update_gated(NULL, y, mv, zv, max_s, &sg, &acc), BINGHAM_ERR_NULL_ARGUMENT, fg);
+        CHECK_FAILS(f, bingham_filter_update_gated(f, NULL, mv, zv, max_s, &sg, &acc), BINGHAM_ERR_NULL_ARGUMENT, fg);
+        CHECK_FAILS(f, bingham_filter_update_gated(f, y, NULL, zv, max_s, &sg, &acc), BINGHAM_ERR_NULL_ARGUMENT, fg);
+        CHECK_FAILS(f, bingham_filter_update_gated(f, y, mv, NULL, max_s, &sg, &acc), BINGHAM_ERR_NULL_ARGUMENT, fg);
+        memcpy(yy, y, sizeof yy);
+        yy[0] = INFINITY;
+        CHECK_FAILS(f, bingham_filter_update_gated(f, yy, mv, zv, INFINITY, &sg, &acc), BINGHAM_ERR_INVALID_ARGUMENT,
+                    fg);
+        CHECK(sg == 12345.0 && acc == 0x5A5A5A5A);
+    }
+    bingham_filter_free(f);
+}
+
 /* ---- threads ------------------------------------------------------------------------------ */
 
 typedef struct {
@@ -487,6 +712,8 @@ int main(void) {
         test_sharp(&sc[i]);
         test_threads(&sc[i]);
     }
+    test_surprise(4);
+    test_surprise(2);
     (void)PI;
     return check_summary("filter_api");
 }

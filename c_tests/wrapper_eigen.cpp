@@ -32,6 +32,10 @@
 //   density equals the first-order filter's world-frame one for the prior compose(spin,
 //   orientation); a noiseless constant spin (x[k+1] = spin * x[k] with Eigen) is found
 //   (spin_mode().angularDistance(spin) < 1e-6 after 300 steps).
+// - Filter::surprise with an Eigen::Quaterniond equals the C call with (w, x, y, z);
+// - Ahrs::update_batch with `spread` and `health` (with and without the magnetometer, health
+//   without spread): row k equals health().score and uncertainty() after the same samples fed
+//   one by one through the Eigen update().
 #include <Eigen/Dense>
 
 #include "bingham_eigen.hpp"
@@ -101,6 +105,9 @@ static void test_quaternions() {
         double ll_c;
         CHECK_OK(bingham_filter_log_likelihood(c, mc, v.M.data(), v.z.data(), &ll_c));
         CHECK(f.log_likelihood(meas, v) == ll_c);
+        double s_c = -1;
+        CHECK_OK(bingham_filter_surprise(c, mc, v.M.data(), v.z.data(), &s_c));
+        CHECK(f.surprise(meas, v) == s_c);
     }
     double m[16], z[4], mode[4];
     CHECK_OK(bingham_filter_get_state(c, m, z));
@@ -282,6 +289,42 @@ static void test_ahrs() {
             for (int c = 0; c < 4; ++c) same_q = same_q && qe(k, c) == qv[4 * k + c];
         CHECK(same_q);
         CHECK(spread(n - 1) == c1.uncertainty());
+        // with the health scores (and the spreads): each row equals health().score and
+        // uncertainty() after the same samples one by one
+        {
+            bingham::Ahrs h1 = a.clone(), h2 = a.clone(), one = a.clone(), one_nomag = a.clone();
+            Eigen::VectorXd sp1, hs1, sp2, hs2;
+            const auto qh = h1.update_batch(gm, am, mm, &sp1, &hs1);
+            const auto qh2 = h2.update_batch(gm, am, &sp2, &hs2);  // without the magnetometer
+            CHECK(qh.rows() == n && sp1.size() == n && hs1.size() == n && qh2.rows() == n && sp2.size() == n &&
+                  hs2.size() == n);
+            bool q_ok = true, sp_ok = true, h_ok = true, q2_ok = true, sp2_ok = true, h2_ok = true;
+            for (int k = 0; k < n; ++k) {
+                one.update(Vector3d(gm.row(k).transpose()), Vector3d(am.row(k).transpose()),
+                           Vector3d(mm.row(k).transpose()));
+                one_nomag.update(Vector3d(gm.row(k).transpose()), Vector3d(am.row(k).transpose()));
+                const Quaterniond q1 = one.quaternion(), q2 = one_nomag.quaternion();
+                q_ok = q_ok && qh(k, 0) == q1.w() && qh(k, 1) == q1.x() && qh(k, 2) == q1.y() && qh(k, 3) == q1.z();
+                sp_ok = sp_ok && sp1(k) == one.uncertainty();
+                h_ok = h_ok && hs1(k) == one.health().score;
+                q2_ok = q2_ok && qh2(k, 0) == q2.w() && qh2(k, 1) == q2.x() && qh2(k, 2) == q2.y() &&
+                        qh2(k, 3) == q2.z();
+                sp2_ok = sp2_ok && sp2(k) == one_nomag.uncertainty();
+                h2_ok = h2_ok && hs2(k) == one_nomag.health().score;
+            }
+            CHECK(q_ok && sp_ok && h_ok);
+            CHECK(q2_ok && sp2_ok && h2_ok);
+            CHECK(hs1.allFinite() && hs1.minCoeff() >= 0 && hs1(n - 1) == h1.health().score);
+            // the score from the C readout of the same handle
+            bingham_ahrs_health_report hc;
+            CHECK_OK(bingham_ahrs_health(h1.get(), &hc));
+            CHECK(hc.score == hs1(n - 1) && hc.has_mag_reference == 1);
+            // health alone (no spread): the same scores
+            bingham::Ahrs h3 = a.clone();
+            Eigen::VectorXd hs3;
+            const auto qh3 = h3.update_batch(gm, am, mm, nullptr, &hs3);
+            CHECK(qh3 == qh && hs3 == hs1);
+        }
         const auto q6 = c3.update_batch(gm, am);  // without the magnetometer
         CHECK(q6.rows() == n);
         bool threw = false;

@@ -16,6 +16,11 @@
 //   (directions conj(m_i) y), the world-frame prediction with a control equals
 //   compose(noise, rotate_left(state, u)); SpinFilter on a noiseless constant spin converges to
 //   it (spin mode within 1e-6 rad after 300 steps).
+// - Filter::surprise (quaternion and complex) equals bingham_filter_surprise; update_gated's
+//   Gated{accepted, surprise} equals bingham_filter_update_gated's outputs on a C handle in the
+//   same state, and the states stay equal (a measurement in (x, y, z, w) order gated out, the
+//   filter unchanged); NaN / negative max_surprise throw with the C call's status and message;
+// - Ahrs::health() equals bingham_ahrs_health field by field; all zero on a fresh AHRS.
 //
 // Built as C++17 and as C++20 with -Wall -Wextra -Werror -pedantic (tests/c_tests.rs) and under
 // ASan + UBSan + LSan (scripts/sanitize.sh).
@@ -270,6 +275,65 @@ static void test_filter() {
                                                   std::array<double, 3>{1, 0, 0}.data(), 5.0, &llv_c));
     CHECK(f.log_likelihood(meas, v) == ll_c && f.log_likelihood_vector({1, 0, 0}, {1, 0, 0}, 5.0) == llv_c);
 
+    // surprise: the C call's value; update_gated: the C call's surprise and decision, the same
+    // state afterwards (applied: as update(); gated out: unchanged)
+    {
+        double s_c = -1;
+        CHECK_OK(bingham_filter_surprise(c, meas_c, v.M.data(), v.z.data(), &s_c));
+        const double s_w = f.surprise(meas, v);
+        CHECK(s_w == s_c && s_w >= 0);
+        // the (x, y, z, w) order of the same quaternion: far from the state
+        const bingham::Quaternion wrong(meas.x, meas.y, meas.z, meas.w);
+        const double wrong_c[4] = {wrong.w, wrong.x, wrong.y, wrong.z};
+        double sw_c = -1;
+        CHECK_OK(bingham_filter_surprise(c, wrong_c, v.M.data(), v.z.data(), &sw_c));
+        CHECK(f.surprise(wrong, v) == sw_c && sw_c > 16.27);
+        const Distribution st0 = f.state();
+        const Filter::Gated out = f.update_gated(wrong, v, 16.27);
+        double gs_c = -1;
+        std::int32_t acc_c = -1;
+        CHECK_OK(bingham_filter_update_gated(c, wrong_c, v.M.data(), v.z.data(), 16.27, &gs_c, &acc_c));
+        CHECK(!out.accepted && acc_c == 0 && out.surprise == gs_c && out.surprise == sw_c);
+        CHECK(same(f.state(), st0));
+        const Filter::Gated in = f.update_gated(meas, v, 16.27);
+        CHECK_OK(bingham_filter_update_gated(c, meas_c, v.M.data(), v.z.data(), 16.27, &gs_c, &acc_c));
+        CHECK(in.accepted == (s_c <= 16.27) && acc_c == (in.accepted ? 1 : 0) && in.surprise == gs_c &&
+              in.surprise == s_c);
+        // the measurement the filter has been fed: applied
+        CHECK(in.accepted && s_c <= 16.27 && !same(f.state(), st0));
+        Distribution sg(std::vector<double>(16), std::vector<double>(4));
+        CHECK_OK(bingham_filter_get_state(c, sg.M.data(), sg.z.data()));
+        CHECK(same(f.state(), sg));
+        // errors: the C call's status and message, the filter unchanged
+        const Distribution st1 = f.state();
+        expect_error([&] { (void)f.update_gated(meas, v, std::nan("")); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                     [&] {
+                         double ss;
+                         std::int32_t aa;
+                         return bingham_filter_update_gated(c, meas_c, v.M.data(), v.z.data(), std::nan(""), &ss, &aa);
+                     },
+                     "update_gated with a NaN max_surprise");
+        expect_error([&] { (void)f.update_gated(meas, v, -1.0); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                     [&] {
+                         double ss;
+                         std::int32_t aa;
+                         return bingham_filter_update_gated(c, meas_c, v.M.data(), v.z.data(), -1.0, &ss, &aa);
+                     },
+                     "update_gated with a negative max_surprise");
+        expect_error([&] { (void)f.surprise(bingham::Quaternion(2, 0, 0, 0), v); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                     [&] {
+                         const double bad[4] = {2, 0, 0, 0};
+                         double ss;
+                         return bingham_filter_surprise(c, bad, v.M.data(), v.z.data(), &ss);
+                     },
+                     "surprise of a non-unit quaternion");
+        expect_error([&] { (void)f.surprise(std::complex<double>(1, 0), v); }, BINGHAM_ERR_INVALID_DIMENSION,
+                     "complex surprise on a d = 4 filter");
+        expect_error([&] { (void)f.update_gated(std::complex<double>(1, 0), v, 16.27); },
+                     BINGHAM_ERR_INVALID_DIMENSION, "complex update_gated on a d = 4 filter");
+        CHECK(same(f.state(), st1));
+    }
+
     // errors leave the filter unchanged
     const Distribution before = f.state();
     expect_error([&] { f.update(bingham::Quaternion(2, 0, 0, 0), v); }, BINGHAM_ERR_INVALID_ARGUMENT,
@@ -332,6 +396,31 @@ static void test_filter() {
     CHECK(m2.real() == m2v[0] && m2.imag() == m2v[1]);
     expect_error([&] { axis.update(bingham::Quaternion(), w2); }, BINGHAM_ERR_INVALID_DIMENSION,
                  "quaternion on a d = 2 filter");
+    // d = 2: surprise and update_gated with complex numbers against the C calls on a clone
+    {
+        bingham_filter *c2 = nullptr;
+        CHECK_OK(bingham_filter_clone(axis.get(), &c2));
+        const std::complex<double> near = std::polar(1.0, 0.33), far = std::polar(1.0, 1.3);
+        const double near_c[2] = {near.real(), near.imag()}, far_c[2] = {far.real(), far.imag()};
+        double s_near = -1, s_far = -1, gs = -1;
+        std::int32_t acc = -1;
+        CHECK_OK(bingham_filter_surprise(c2, near_c, w2.M.data(), w2.z.data(), &s_near));
+        CHECK_OK(bingham_filter_surprise(c2, far_c, w2.M.data(), w2.z.data(), &s_far));
+        CHECK(axis.surprise(near, w2) == s_near && axis.surprise(far, w2) == s_far && s_near < 10.83 && s_far > 10.83);
+        const Distribution st = axis.state();
+        const Filter::Gated out = axis.update_gated(far, w2, 10.83);
+        CHECK_OK(bingham_filter_update_gated(c2, far_c, w2.M.data(), w2.z.data(), 10.83, &gs, &acc));
+        CHECK(!out.accepted && acc == 0 && out.surprise == gs && gs == s_far && same(axis.state(), st));
+        const Filter::Gated in = axis.update_gated(near, w2, 10.83);
+        CHECK_OK(bingham_filter_update_gated(c2, near_c, w2.M.data(), w2.z.data(), 10.83, &gs, &acc));
+        CHECK(in.accepted && acc == 1 && in.surprise == gs && gs == s_near && !same(axis.state(), st));
+        Distribution s2(std::vector<double>(4), std::vector<double>(2));
+        CHECK_OK(bingham_filter_get_state(c2, s2.M.data(), s2.z.data()));
+        CHECK(same(axis.state(), s2));
+        expect_error([&] { (void)axis.surprise(bingham::Quaternion(), w2); }, BINGHAM_ERR_INVALID_DIMENSION,
+                     "quaternion surprise on a d = 2 filter");
+        bingham_filter_free(c2);
+    }
     bingham_filter_free(c);
 }
 
@@ -699,6 +788,13 @@ static void test_spin_filter() {
     CHECK(err < 1e-6 && x_err < 1e-6 && err20 < 0.2);
 }
 
+static bool same_health(const bingham_ahrs_health_report &a, const bingham_ahrs_health_report &b) {
+    return a.score == b.score && a.gravity_score == b.gravity_score && a.tilt_score == b.tilt_score &&
+           a.heading_score == b.heading_score && a.tilt_innovation == b.tilt_innovation &&
+           a.heading_innovation == b.heading_innovation && a.mag_rejected == b.mag_rejected && a.mag_dip == b.mag_dip &&
+           a.has_mag_reference == b.has_mag_reference;
+}
+
 static void test_ahrs() {
     const double dt = 0.01;
     bingham::Ahrs a(dt);
@@ -742,6 +838,20 @@ static void test_ahrs() {
         const std::array<double, 9> c0 = bingham::Ahrs(pw).gyro_bias_covariance();
         for (std::size_t i = 0; i < 9; ++i)
             CHECK(c0[i] == (i % 4 == 0 ? pw.bias_std * pw.bias_std : 0.0));
+    }
+    // the health readout: the C call's, field by field; all zero on a fresh AHRS
+    {
+        bingham_ahrs_health_report hc;
+        std::memset(&hc, 0xA5, sizeof hc);
+        CHECK_OK(bingham_ahrs_health(c, &hc));
+        const bingham_ahrs_health_report hw = a.health();
+        CHECK(same_health(hw, hc));
+        CHECK(hw.has_mag_reference == 1 &&
+              hw.score == std::fmax(hw.gravity_score, std::fmax(hw.tilt_score, hw.heading_score)));
+        const bingham_ahrs_health_report h0 = bingham::Ahrs(pw).health();
+        CHECK(h0.score == 0 && h0.gravity_score == 0 && h0.tilt_score == 0 && h0.heading_score == 0 &&
+              h0.tilt_innovation == 0 && h0.heading_innovation == 0 && h0.mag_rejected == 0 && h0.mag_dip == 0 &&
+              h0.has_mag_reference == 0);
     }
     // the latency readout: none yet after 51 samples (nullopt for BINGHAM_ERR_NOT_CONVERGED)
     double lat = -1.0;
@@ -828,6 +938,7 @@ static void test_ahrs() {
     CHECK(!a && static_cast<bool>(moved) && same(moved.state(), before));
     expect_error([&] { (void)a.quaternion(); }, BINGHAM_ERR_NULL_ARGUMENT, "moved-from AHRS");
     expect_error([&] { (void)a.gyro_bias_covariance(); }, BINGHAM_ERR_NULL_ARGUMENT, "moved-from AHRS");
+    expect_error([&] { (void)a.health(); }, BINGHAM_ERR_NULL_ARGUMENT, "health of a moved-from AHRS");
     a = std::move(other);
     moved = std::move(a);
     CHECK(!a && static_cast<bool>(moved) && same(moved.state(), before));
