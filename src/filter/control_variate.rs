@@ -11,6 +11,8 @@
 
 #![allow(clippy::needless_range_loop)] // small dense sums over parallel arrays
 
+use super::rqmc::LogShift;
+
 /// The most control features (the 35 fourth-degree monomials in 4 variables, one dropped).
 pub(super) const MAX_FEATURES: usize = 34;
 
@@ -70,7 +72,7 @@ impl Features {
 /// relative to the largest `lw` seen.
 #[derive(Clone, Copy)]
 pub(super) struct ReplicateSums {
-    top: f64,
+    shift: LogShift,
     sw: f64,
     sh: [f64; MAX_FEATURES],
     sg: [f64; 10],
@@ -79,7 +81,7 @@ pub(super) struct ReplicateSums {
 impl ReplicateSums {
     pub(super) fn new() -> Self {
         ReplicateSums {
-            top: f64::NEG_INFINITY,
+            shift: LogShift::new(),
             sw: 0.0,
             sh: [0.0; MAX_FEATURES],
             sg: [0.0; 10],
@@ -87,18 +89,12 @@ impl ReplicateSums {
     }
 
     pub(super) fn add(&mut self, lw: f64, h: &[f64; MAX_FEATURES], g: &[f64; 10]) {
-        if lw > self.top {
-            let s = if self.top == f64::NEG_INFINITY {
-                0.0
-            } else {
-                (self.top - lw).exp()
-            };
+        let (rescale, w) = self.shift.admit(lw);
+        if let Some(s) = rescale {
             self.sw *= s;
             self.sh.iter_mut().for_each(|v| *v *= s);
             self.sg.iter_mut().for_each(|v| *v *= s);
-            self.top = lw;
         }
-        let w = (lw - self.top).exp();
         self.sw += w;
         for (acc, v) in self.sh.iter_mut().zip(h) {
             *acc += w * v;
@@ -129,7 +125,7 @@ pub(super) struct Beta(pub(super) [[f64; 10]; MAX_FEATURES]);
 /// The pooled cross sums `Σ w h hᵀ`, `Σ w h gᵀ` (with `Σ w`, `Σ w²`, `Σ w h`, `Σ w g`) for the
 /// regression, over every replicate, relative to one running maximum of `lw`.
 pub(super) struct PooledSums {
-    top: f64,
+    shift: LogShift,
     sw: f64,
     sw2: f64,
     n: usize,
@@ -142,7 +138,7 @@ pub(super) struct PooledSums {
 impl PooledSums {
     pub(super) fn new() -> Self {
         PooledSums {
-            top: f64::NEG_INFINITY,
+            shift: LogShift::new(),
             sw: 0.0,
             sw2: 0.0,
             n: 0,
@@ -154,12 +150,8 @@ impl PooledSums {
     }
 
     pub(super) fn add(&mut self, lw: f64, h: &[f64; MAX_FEATURES], nh: usize, g: &[f64; 10]) {
-        if lw > self.top {
-            let s = if self.top == f64::NEG_INFINITY {
-                0.0
-            } else {
-                (self.top - lw).exp()
-            };
+        let (rescale, w) = self.shift.admit(lw);
+        if let Some(s) = rescale {
             self.sw *= s;
             self.sw2 *= s * s;
             self.sh.iter_mut().for_each(|v| *v *= s);
@@ -170,9 +162,7 @@ impl PooledSums {
             for r in self.shg.iter_mut() {
                 r.iter_mut().for_each(|v| *v *= s);
             }
-            self.top = lw;
         }
-        let w = (lw - self.top).exp();
         self.sw += w;
         self.sw2 += w * w;
         self.n += 1;

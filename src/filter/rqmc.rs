@@ -179,11 +179,43 @@ impl<const D: usize> Acg<D> {
     }
 }
 
+/// The running largest log-weight of a weighted sum: weights `w = exp(lw)` are held relative
+/// to it, `exp(lw − top)` ≤ 1, so that neither the weights nor the sums overflow; when a larger
+/// `lw` arrives, the sums held so far are multiplied by `exp(top_old − top_new)`.
+#[derive(Clone, Copy)]
+pub(super) struct LogShift {
+    top: f64,
+}
+
+impl LogShift {
+    pub(super) fn new() -> Self {
+        LogShift {
+            top: f64::NEG_INFINITY,
+        }
+    }
+
+    /// Admits the log-weight `lw`: returns the factor by which the sums held so far must be
+    /// multiplied (`Some` when `lw` is a new maximum: 0 before the first value) and the
+    /// relative weight `exp(lw − top)` of the new value.
+    pub(super) fn admit(&mut self, lw: f64) -> (Option<f64>, f64) {
+        let mut rescale = None;
+        if lw > self.top {
+            rescale = Some(if self.top == f64::NEG_INFINITY {
+                0.0
+            } else {
+                (self.top - lw).exp()
+            });
+            self.top = lw;
+        }
+        (rescale, (lw - self.top).exp())
+    }
+}
+
 /// Running sums of weighted values `Σ w g` and `Σ w` with `w = exp(lw)` held relative to the
-/// largest `lw` seen (rescaled when a larger one arrives), so that neither overflows.
+/// largest `lw` seen ([`LogShift`]), so that neither overflows.
 #[derive(Clone, Copy)]
 pub(super) struct WeightedSums<const N: usize> {
-    top: f64,
+    shift: LogShift,
     sw: f64,
     sw2: f64,
     swg: [f64; N],
@@ -193,7 +225,7 @@ pub(super) struct WeightedSums<const N: usize> {
 impl<const N: usize> WeightedSums<N> {
     pub(super) fn new() -> Self {
         WeightedSums {
-            top: f64::NEG_INFINITY,
+            shift: LogShift::new(),
             sw: 0.0,
             sw2: 0.0,
             swg: [0.0; N],
@@ -202,20 +234,14 @@ impl<const N: usize> WeightedSums<N> {
     }
 
     pub(super) fn add(&mut self, lw: f64, g: &[f64; N]) {
-        if lw > self.top {
-            let s = if self.top == f64::NEG_INFINITY {
-                0.0
-            } else {
-                (self.top - lw).exp()
-            };
+        let (rescale, w) = self.shift.admit(lw);
+        if let Some(s) = rescale {
             self.sw *= s;
             self.sw2 *= s * s;
             for v in self.swg.iter_mut() {
                 *v *= s;
             }
-            self.top = lw;
         }
-        let w = (lw - self.top).exp();
         self.sw += w;
         self.sw2 += w * w;
         for (acc, v) in self.swg.iter_mut().zip(g) {
@@ -231,21 +257,21 @@ impl<const N: usize> WeightedSums<N> {
 
     /// These sums and `other`'s pooled (same weight function).
     pub(super) fn pooled(&self, other: &Self) -> Self {
-        let top = self.top.max(other.top);
+        let top = self.shift.top.max(other.shift.top);
         let (a, b) = (
             if self.n == 0 {
                 0.0
             } else {
-                (self.top - top).exp()
+                (self.shift.top - top).exp()
             },
             if other.n == 0 {
                 0.0
             } else {
-                (other.top - top).exp()
+                (other.shift.top - top).exp()
             },
         );
         WeightedSums {
-            top,
+            shift: LogShift { top },
             sw: a * self.sw + b * other.sw,
             sw2: a * a * self.sw2 + b * b * other.sw2,
             swg: core::array::from_fn(|k| a * self.swg[k] + b * other.swg[k]),
