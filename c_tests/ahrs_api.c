@@ -45,22 +45,16 @@
 #define _DEFAULT_SOURCE 1
 #include <stdint.h>
 #include <stdlib.h>
-#include <sys/mman.h>
-#include <unistd.h>
 
 #include "check.h"
+#include "api_util.h"
 
 static const double PI = 3.14159265358979323846;
-static void *no_access_page; /* PROT_NONE: any access crashes */
 
 /* The last message starts with "<fn>: " and contains `needle` (if not NULL). */
 #define check_msg(fn, needle) CHECK_MESSAGE(fn, needle)
 
-static void check_null_msg(const char *fn, const char *arg) {
-    char needle[64];
-    snprintf(needle, sizeof needle, "`%s` is NULL", arg);
-    check_msg(fn, needle);
-}
+static void check_null_msg(const char *fn, const char *arg) { check_msg(fn, null_needle(arg)); }
 
 #define SENT 0xA5
 static void fill(void *p, size_t bytes) { memset(p, SENT, bytes); }
@@ -77,18 +71,13 @@ static int all_finite(const double *v, size_t n) {
     return 1;
 }
 
-static void normalize3(double *v) {
-    double s = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    v[0] /= s, v[1] /= s, v[2] /= s;
-}
-
 /* ---- bingham_vector_observation ---------------------------------------------------------- */
 
 static void test_vector_observation(void) {
     const char *fn = "bingham_vector_observation";
     double b[3] = {0.3, -0.5, 0.8}, r[3] = {0.1, 0.2, -0.9}, m[16], z[4];
-    normalize3(b);
-    normalize3(r);
+    normalize(b, 3);
+    normalize(r, 3);
     CHECK_OK(bingham_vector_observation(b, r, 4.0, m, z));
     CHECK(all_finite(m, 16) && z[0] == -8.0 && z[1] == -8.0 && z[2] == 0.0 && z[3] == 0.0);
     CHECK_OK(bingham_vector_observation(b, r, 0.0, m, z));
@@ -179,7 +168,7 @@ static void test_noise_from_angle_std(void) {
     }
     const size_t bad_d[5] = {0, 1, 3, 5, (size_t)-1};
     for (int k = 0; k < 5; ++k) {
-        CHECK_STATUS(bingham_noise_from_angle_std(bad_d[k], 0.1, (double *)no_access_page, (double *)no_access_page),
+        CHECK_STATUS(bingham_noise_from_angle_std(bad_d[k], 0.1, no_access(), no_access()),
                      BINGHAM_ERR_INVALID_DIMENSION);
         check_msg(fn, "d = ");
         CHECK_STATUS(bingham_noise_from_angle_std(bad_d[k], NAN, NULL, NULL), BINGHAM_ERR_INVALID_DIMENSION);
@@ -233,8 +222,7 @@ static void test_angular_spread(void) {
     /* d = 3 and other bad d: refused before any access */
     const size_t bad_d[5] = {0, 1, 3, 5, 65};
     for (int k = 0; k < 5; ++k) {
-        CHECK_STATUS(bingham_angular_spread(bad_d[k], (const double *)no_access_page, (const double *)no_access_page,
-                                            (double *)no_access_page),
+        CHECK_STATUS(bingham_angular_spread(bad_d[k], no_access(), no_access(), no_access()),
                      BINGHAM_ERR_INVALID_DIMENSION);
         check_msg(fn, "d = ");
     }
@@ -242,22 +230,11 @@ static void test_angular_spread(void) {
 
 /* ---- the filter with vectors ---------------------------------------------------------------- */
 
-typedef struct {
-    double m[16], z[4];
-} fstate;
-
-static fstate fsnap(const bingham_filter *f) {
-    fstate s;
-    memset(&s, 0, sizeof s);
-    CHECK_OK(bingham_filter_get_state(f, s.m, s.z));
-    return s;
-}
-
 static void test_filter_vector(void) {
     const double m0[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
     const double z0[4] = {-20, -10, -5, 0};
     double b[3] = {0.2, 0.1, 0.97}, r[3] = {0, 0, 1};
-    normalize3(b);
+    normalize(b, 3);
     bingham_filter *f = NULL, *f2 = NULL;
     CHECK_OK(bingham_filter_new(4, m0, z0, &f));
     const double m2[4] = {1, 0, 0, 1}, z2[2] = {-3, 0};
@@ -279,7 +256,8 @@ static void test_filter_vector(void) {
     CHECK_OK(bingham_filter_angular_spread(f2, sp2));
     CHECK(all_finite(sp2, 2) && untouched(&sp2[2], sizeof(double))); /* d = 2: exactly 2 written */
 
-    fstate s0 = fsnap(f);
+    snapshot s0;
+    CHECK_OK(snap_status(f, &s0));
     /* update_vector: NULLs */
     const char *fu = "bingham_filter_update_vector", *fl = "bingham_filter_log_likelihood_vector";
     CHECK_STATUS(bingham_filter_update_vector(NULL, b, r, 1.0), BINGHAM_ERR_NULL_ARGUMENT);
@@ -333,30 +311,33 @@ static void test_filter_vector(void) {
         check_msg(fl, "kappa");
         CHECK(untouched(&out, sizeof out));
     }
-    fstate s1 = fsnap(f);
-    CHECK(memcmp(&s0, &s1, sizeof s0) == 0);
+    snapshot s1;
+    CHECK_OK(snap_status(f, &s1));
+    CHECK(same(s0, s1));
 
     /* a d = 2 filter: INVALID_DIMENSION, state unchanged */
-    double m2b[4], z2b[2], m2a[4], z2a[2];
-    CHECK_OK(bingham_filter_get_state(f2, m2b, z2b));
+    snapshot t0, t1;
+    CHECK_OK(snap_status(f2, &t0));
     CHECK_STATUS(bingham_filter_update_vector(f2, b, r, 1.0), BINGHAM_ERR_INVALID_DIMENSION);
     check_msg(fu, "d = 2");
     CHECK_STATUS(bingham_filter_log_likelihood_vector(f2, b, r, 1.0, &out), BINGHAM_ERR_INVALID_DIMENSION);
     check_msg(fl, "d = 2");
     CHECK(untouched(&out, sizeof out));
-    CHECK_OK(bingham_filter_get_state(f2, m2a, z2a));
-    CHECK(memcmp(m2a, m2b, sizeof m2a) == 0 && memcmp(z2a, z2b, sizeof z2a) == 0);
+    CHECK_OK(snap_status(f2, &t1));
+    CHECK(same(t0, t1));
 
     /* kappa = 0: no information, the state stays */
     CHECK_OK(bingham_filter_update_vector(f, b, r, 0.0));
-    fstate s2 = fsnap(f);
+    snapshot s2;
+    CHECK_OK(snap_status(f, &s2));
     for (int i = 0; i < 4; ++i) CHECK_CLOSE(s2.z[i], s0.z[i], 1e-12);
     /* huge kappa: a sharp state or NUMERICAL, never a broken state */
     int st = (int)bingham_filter_update_vector(f, b, r, 1e300);
     CHECK(st == BINGHAM_OK || st == BINGHAM_ERR_NUMERICAL);
-    fstate s3 = fsnap(f);
+    snapshot s3;
+    CHECK_OK(snap_status(f, &s3));
     CHECK(all_finite(s3.m, 16) && all_finite(s3.z, 4) && s3.z[3] == 0.0);
-    if (st != BINGHAM_OK) CHECK(memcmp(&s2, &s3, sizeof s2) == 0);
+    if (st != BINGHAM_OK) CHECK(same(s2, s3));
     bingham_filter_free(f);
     bingham_filter_free(f2);
 }
@@ -446,10 +427,10 @@ static void test_ahrs_params_and_new(void) {
     CHECK_OK(bingham_ahrs_params_default(0.01, &q));
     CHECK(memcmp(&p, &q, sizeof p) == 0); /* deterministic */
 
-    bingham_ahrs *a = (bingham_ahrs *)no_access_page;
+    bingham_ahrs *a = (bingham_ahrs *)no_access();
     CHECK_STATUS(bingham_ahrs_new(NULL, &a), BINGHAM_ERR_NULL_ARGUMENT);
     check_null_msg("bingham_ahrs_new", "p");
-    CHECK(a == (bingham_ahrs *)no_access_page);
+    CHECK(a == (bingham_ahrs *)no_access());
     CHECK_STATUS(bingham_ahrs_new(&p, NULL), BINGHAM_ERR_NULL_ARGUMENT);
     check_null_msg("bingham_ahrs_new", "out");
     const double bad_st[5] = {0.0, NAN, -1.0, INFINITY, 100.0};
@@ -458,7 +439,7 @@ static void test_ahrs_params_and_new(void) {
         q.sample_time = bad_st[k];
         CHECK_STATUS(bingham_ahrs_new(&q, &a), BINGHAM_ERR_INVALID_ARGUMENT);
         check_msg("bingham_ahrs_new", "sample_time");
-        CHECK(a == (bingham_ahrs *)no_access_page);
+        CHECK(a == (bingham_ahrs *)no_access());
     }
     a = NULL;
     CHECK_OK(bingham_ahrs_new(&p, &a));
@@ -607,12 +588,12 @@ static void test_ahrs_update(void) {
         }
     }
     /* clone: NULLs; then identical evolution */
-    bingham_ahrs *c = (bingham_ahrs *)no_access_page;
+    bingham_ahrs *c = (bingham_ahrs *)no_access();
     CHECK_STATUS(bingham_ahrs_clone(NULL, &c), BINGHAM_ERR_NULL_ARGUMENT);
     check_null_msg("bingham_ahrs_clone", "a");
     CHECK_STATUS(bingham_ahrs_clone(a, NULL), BINGHAM_ERR_NULL_ARGUMENT);
     check_null_msg("bingham_ahrs_clone", "out");
-    CHECK(c == (bingham_ahrs *)no_access_page);
+    CHECK(c == (bingham_ahrs *)no_access());
     c = NULL;
     CHECK_OK(bingham_ahrs_clone(a, &c));
     if (c) {
@@ -722,8 +703,7 @@ static void test_ahrs_batch(void) {
         CHECK_STATUS(bingham_ahrs_update_batch_spread(a, N, g, acc, mag, NULL, spread), BINGHAM_ERR_NULL_ARGUMENT);
         check_null_msg("bingham_ahrs_update_batch_spread", "quat");
         /* n * 4 overflowing: refused before any access */
-        CHECK_STATUS(bingham_ahrs_update_batch(a, (size_t)-1 / 2, (const double *)no_access_page,
-                                               (const double *)no_access_page, NULL, (double *)no_access_page),
+        CHECK_STATUS(bingham_ahrs_update_batch(a, (size_t)-1 / 2, no_access(), no_access(), NULL, no_access()),
                      BINGHAM_ERR_INVALID_DIMENSION);
         check_msg(fn, NULL);
         CHECK(untouched(quat, sizeof quat) && same_state(s, asnap(a)));
@@ -967,14 +947,14 @@ static void test_ahrs_bias_uncertainty(void) {
     CHECK(fabs(p.bias_std - 0.5 * PI / 180.0) <= 1e-15); /* 0.5 deg/s */
     CHECK(p.gyro_scale_noise >= 0.0 && isfinite(p.gyro_scale_noise));
     /* invalid values refused by bingham_ahrs_new, the message naming the field */
-    bingham_ahrs *a = (bingham_ahrs *)no_access_page;
+    bingham_ahrs *a = (bingham_ahrs *)no_access();
     const double bad_std[6] = {NAN, -1.0, -1e-300, 0.0, -0.0, INFINITY};
     for (int k = 0; k < 6; ++k) {
         q = p;
         q.bias_std = bad_std[k];
         CHECK_STATUS(bingham_ahrs_new(&q, &a), BINGHAM_ERR_INVALID_ARGUMENT);
         check_msg("bingham_ahrs_new", "bias_std");
-        CHECK(a == (bingham_ahrs *)no_access_page);
+        CHECK(a == (bingham_ahrs *)no_access());
     }
     const double bad_scale[4] = {NAN, -1.0, -1e-300, INFINITY};
     for (int k = 0; k < 4; ++k) {
@@ -982,7 +962,7 @@ static void test_ahrs_bias_uncertainty(void) {
         q.gyro_scale_noise = bad_scale[k];
         CHECK_STATUS(bingham_ahrs_new(&q, &a), BINGHAM_ERR_INVALID_ARGUMENT);
         check_msg("bingham_ahrs_new", "gyro_scale_noise");
-        CHECK(a == (bingham_ahrs *)no_access_page);
+        CHECK(a == (bingham_ahrs *)no_access());
     }
     /* gyro_scale_noise = 0 is valid (no rate-proportional noise) */
     q = p;
@@ -1080,7 +1060,7 @@ static void test_ahrs_latency(void) {
     /* default: the magnetometer's online estimate compensated, no accelerometer latency */
     CHECK(p.mag_latency == BINGHAM_AHRS_LATENCY_ESTIMATE && p.acc_latency == 0.0);
     const double bad[5] = {-1e-9, BINGHAM_AHRS_MAX_LATENCY * 1.000001, 11.0, NAN, INFINITY};
-    bingham_ahrs *a = (bingham_ahrs *)no_access_page;
+    bingham_ahrs *a = (bingham_ahrs *)no_access();
     for (int k = 0; k < 5; ++k) {
         q = p;
         q.mag_latency = bad[k];
@@ -1090,7 +1070,7 @@ static void test_ahrs_latency(void) {
         q.acc_latency = bad[k];
         CHECK_STATUS(bingham_ahrs_new(&q, &a), BINGHAM_ERR_INVALID_ARGUMENT);
         check_msg("bingham_ahrs_new", "acc_latency");
-        CHECK(a == (bingham_ahrs *)no_access_page);
+        CHECK(a == (bingham_ahrs *)no_access());
     }
     q = p;
     q.mag_latency = 0.02, q.acc_latency = BINGHAM_AHRS_MAX_LATENCY;
@@ -1140,12 +1120,7 @@ static void test_ahrs_latency(void) {
 }
 
 int main(void) {
-    long page = sysconf(_SC_PAGESIZE);
-    no_access_page = mmap(NULL, (size_t)page, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (no_access_page == MAP_FAILED) {
-        perror("mmap");
-        return 2;
-    }
+    if (guard_pages_init()) return 1;
     (void)PI;
     test_vector_observation();
     test_noise_from_angle_std();

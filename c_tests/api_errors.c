@@ -19,10 +19,9 @@
 #include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
-#include <sys/mman.h>
-#include <unistd.h>
 
 #include "check.h"
+#include "api_util.h"
 
 #define NS 9 /* number of points/samples used in the table-driven tests (> max d used) */
 
@@ -147,27 +146,6 @@ static size_t kind_len(int kind, size_t d, size_t n) {
     }
 }
 
-/* An orthogonal matrix: identity rotated by Givens rotations in the planes (i, i+1). */
-static void fill_orthogonal(size_t d, double *m, double phase) {
-    memset(m, 0, d * d * sizeof *m);
-    for (size_t i = 0; i < d; ++i) m[i * d + i] = 1.0;
-    for (size_t i = 0; i + 1 < d; ++i) {
-        double a = 0.3 + phase + 0.17 * (double)i, c = cos(a), s = sin(a);
-        for (size_t r = 0; r < d; ++r) {
-            double x = m[r * d + i], y = m[r * d + i + 1];
-            m[r * d + i] = c * x - s * y;
-            m[r * d + i + 1] = s * x + c * y;
-        }
-    }
-}
-
-static void normalize(double *v, size_t d) {
-    double s = 0;
-    for (size_t i = 0; i < d; ++i) s += v[i] * v[i];
-    s = sqrt(s);
-    for (size_t i = 0; i < d; ++i) v[i] /= s;
-}
-
 /* Valid content for an input of the given kind. `which` varies the data between arguments. */
 static void fill_input(int kind, size_t d, size_t n, double *a, int which) {
     switch (kind) {
@@ -205,8 +183,6 @@ static void fill_input(int kind, size_t d, size_t n, double *a, int which) {
     default: break;
     }
 }
-
-static void *no_access_page; /* PROT_NONE: any access crashes */
 
 typedef struct {
     double *in[4];
@@ -407,8 +383,8 @@ static void test_function(const fn_t *f) {
         memset(&c, 0, sizeof c);
         c.d = bad_dims[k];
         c.n = NS;
-        for (int i = 0; i < 4; ++i) c.in[i] = f->in_kind[i] != K_NONE ? (const double *)no_access_page : NULL;
-        for (int i = 0; i < 3; ++i) c.out[i] = f->out_kind[i] != K_NONE ? (double *)no_access_page : NULL;
+        for (int i = 0; i < 4; ++i) c.in[i] = f->in_kind[i] != K_NONE ? no_access() : NULL;
+        for (int i = 0; i < 3; ++i) c.out[i] = f->out_kind[i] != K_NONE ? no_access() : NULL;
         CHECK_STATUS(f->call(&c), BINGHAM_ERR_INVALID_DIMENSION);
         check_message(f, "d = ");
         /* NULL everywhere with a bad d: still the dimension error, d is checked first */
@@ -552,7 +528,7 @@ static void test_deterministic_sample_count(void) {
         CHECK_STATUS(bingham_deterministic_sample_count(bad_dims[k], BINGHAM_SAMPLES_MOMENTS, &n),
                      BINGHAM_ERR_INVALID_DIMENSION);
         CHECK_MESSAGE("bingham_deterministic_sample_count", "d = ");
-        CHECK_STATUS(bingham_deterministic_sample_count(bad_dims[k], 0, (size_t *)no_access_page),
+        CHECK_STATUS(bingham_deterministic_sample_count(bad_dims[k], 0, (size_t *)no_access()),
                      BINGHAM_ERR_INVALID_DIMENSION);
     }
     const int bad_schemes[] = {-1, 2, 1 << 30};
@@ -693,9 +669,9 @@ static void test_deterministic_samples(void) {
     /* invalid d: every pointer aims at an inaccessible page */
     const size_t bad_dims[] = {0, 1, 65, (size_t)-1};
     for (size_t k = 0; k < sizeof bad_dims / sizeof bad_dims[0]; ++k) {
-        double *p = (double *)no_access_page;
+        double *p = no_access();
         CHECK_STATUS(bingham_deterministic_samples(bad_dims[k], p, p, BINGHAM_SAMPLES_MOMENTS, 0.5, 1000, p, p,
-                                                   (size_t *)no_access_page, (int *)no_access_page),
+                                                   (size_t *)no_access(), (int *)no_access()),
                      BINGHAM_ERR_INVALID_DIMENSION);
         CHECK_MESSAGE("bingham_deterministic_samples", "d = ");
         CHECK_STATUS(bingham_deterministic_samples(bad_dims[k], NULL, NULL, 0, 0.5, 0, NULL, NULL, NULL, NULL),
@@ -710,35 +686,36 @@ typedef struct {
     int rc; /* returned by the failing callbacks */
 } cb_ctx_t;
 
-static int identity_transition(const double *x_in, double *x_out, void *user_data) {
+/* The context of a callback, with the call counted. */
+static cb_ctx_t *count_call(void *user_data) {
     cb_ctx_t *c = (cb_ctx_t *)user_data;
     ++c->calls;
+    return c;
+}
+
+static int identity_transition(const double *x_in, double *x_out, void *user_data) {
+    cb_ctx_t *c = count_call(user_data);
     memcpy(x_out, x_in, c->d * sizeof *x_out);
     return 0;
 }
 
 static int failing_transition(const double *x_in, double *x_out, void *user_data) {
-    cb_ctx_t *c = (cb_ctx_t *)user_data;
     (void)x_in;
     (void)x_out;
-    ++c->calls;
-    return c->rc;
+    return count_call(user_data)->rc;
 }
 
 static int constant_log_likelihood(const double *x, double *log_l, void *user_data) {
-    cb_ctx_t *c = (cb_ctx_t *)user_data;
     (void)x;
-    ++c->calls;
+    count_call(user_data);
     *log_l = -2.5;
     return 0;
 }
 
 static int failing_log_likelihood(const double *x, double *log_l, void *user_data) {
-    cb_ctx_t *c = (cb_ctx_t *)user_data;
     (void)x;
     (void)log_l;
-    ++c->calls;
-    return c->rc;
+    return count_call(user_data)->rc;
 }
 
 /* The _opts forms: defaults, bad options refused before any callback, the report, the budget. */
@@ -975,12 +952,7 @@ static void test_status_strings_and_version(void) {
 }
 
 int main(void) {
-    long page = sysconf(_SC_PAGESIZE);
-    no_access_page = mmap(NULL, (size_t)page, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (no_access_page == MAP_FAILED) {
-        perror("mmap");
-        return 2;
-    }
+    if (guard_pages_init()) return 1;
     {
         /* fresh thread state: no error yet -> empty message */
         size_t len = 99;

@@ -1,8 +1,9 @@
-/* Helpers shared by the C API tests spin_api.c (the spin filter handle) and world_api.c (the
- * world-frame steps of the filter handle): input arrays placed flush against an inaccessible page,
- * test matrices and unit vectors, the expected message fragments, and the distance between two
- * Bingham exponents. Include after check.h, with _DEFAULT_SOURCE defined before any #include
- * (for MAP_ANONYMOUS under -std=c99); call guard_pages_init() first in main(). */
+/* Helpers shared by the C API tests (api_errors.c, ahrs_api.c, filter_api.c, spin_api.c,
+ * world_api.c): input arrays placed flush against an inaccessible page, the filter handle's state
+ * as raw bytes, test matrices and unit vectors, the expected message fragments, and the distance
+ * between two Bingham exponents. Include after check.h, with _DEFAULT_SOURCE defined before any
+ * #include (for MAP_ANONYMOUS under -std=c99); call guard_pages_init() first in main().
+ * Everything here is static inline (no file-scope variables), so a program may use any part. */
 #ifndef BINGHAM_C_TESTS_API_UTIL_H
 #define BINGHAM_C_TESTS_API_UTIL_H
 
@@ -12,34 +13,69 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
-static unsigned char *guard_pages; /* [readable page][PROT_NONE page] */
-static size_t page_size;
+/* [readable page][PROT_NONE page], mapped by guard_pages_init(). */
+typedef struct {
+    unsigned char *base;
+    size_t page_size;
+} guard_pages_t;
+
+static inline guard_pages_t *guard_pages(void) {
+    static guard_pages_t g;
+    return &g;
+}
+
+/* The start of the inaccessible page: any access crashes. */
+static inline double *no_access(void) { return (double *)(guard_pages()->base + guard_pages()->page_size); }
 
 /* A copy of src[0..n) ending exactly at an inaccessible page: reading past n crashes. There is
  * one such buffer: pass at most one flush() result per call. */
 static inline double *flush(const double *src, size_t n) {
-    double *p = (double *)(guard_pages + page_size) - n;
+    double *p = no_access() - n;
     memcpy(p, src, n * sizeof(double));
     return p;
 }
 
-static inline double *no_access(void) { return (double *)(guard_pages + page_size); }
-
-/* Maps guard_pages and makes its second page inaccessible; 0 on success, else 1 (with perror). */
+/* Maps the guard pages and makes the second one inaccessible; 0 on success, else 1 (with perror). */
 static inline int guard_pages_init(void) {
+    guard_pages_t *g = guard_pages();
     long ps = sysconf(_SC_PAGESIZE);
-    page_size = ps > 0 ? (size_t)ps : 4096;
-    guard_pages = mmap(NULL, 2 * page_size, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-    if (guard_pages == MAP_FAILED || mprotect(guard_pages + page_size, page_size, PROT_NONE)) {
+    g->page_size = ps > 0 ? (size_t)ps : 4096;
+    g->base = mmap(NULL, 2 * g->page_size, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (g->base == MAP_FAILED || mprotect(g->base + g->page_size, g->page_size, PROT_NONE)) {
         perror("mmap/mprotect");
         return 1;
     }
     return 0;
 }
+
+/* The state of a filter handle (d = 2 or 4; zero past d) as raw bytes, for bit-for-bit
+ * comparisons. */
+typedef struct {
+    double m[16], z[4];
+} snapshot;
+
+/* Zeroes *s and reads the state of `f` into it; returns bingham_filter_get_state's status. */
+static inline bingham_status snap_status(const bingham_filter *f, snapshot *s) {
+    memset(s, 0, sizeof *s);
+    return bingham_filter_get_state(f, s->m, s->z);
+}
+
+/* The state of `f`; exits the program if it cannot be read. */
+static inline snapshot snap(const bingham_filter *f) {
+    snapshot s;
+    if (snap_status(f, &s) != BINGHAM_OK) {
+        fprintf(stderr, "bingham_filter_get_state failed\n");
+        exit(1);
+    }
+    return s;
+}
+
+static inline int same(snapshot a, snapshot b) { return memcmp(&a, &b, sizeof a) == 0; }
 
 /* An orthogonal matrix: the identity rotated by Givens rotations in the planes (i, i+1). */
 static inline void fill_orthogonal(size_t d, double *m, double phase) {

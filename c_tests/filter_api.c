@@ -28,25 +28,11 @@
 #include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
-#include <sys/mman.h>
-#include <unistd.h>
 
 #include "check.h"
+#include "api_util.h"
 
 static const double PI = 3.14159265358979323846;
-
-static unsigned char *guard_pages; /* [readable page][PROT_NONE page] */
-static size_t page_size;
-
-/* A copy of src[0..n) ending exactly at an inaccessible page: reading past n crashes. There is
- * one such buffer: pass at most one flush() result per call. */
-static double *flush(const double *src, size_t n) {
-    double *p = (double *)(guard_pages + page_size) - n;
-    memcpy(p, src, n * sizeof(double));
-    return p;
-}
-
-static double *no_access(void) { return (double *)(guard_pages + page_size); }
 
 typedef struct {
     size_t d;
@@ -69,23 +55,6 @@ static scenario scenario_4d(void) {
                   {0, 1, 0, 0}};
     return s;
 }
-
-/* The state as raw bytes, for bit-for-bit comparisons. */
-typedef struct {
-    double m[16], z[4];
-} snapshot;
-
-static snapshot snap(const bingham_filter *f) {
-    snapshot s;
-    memset(&s, 0, sizeof s);
-    if (bingham_filter_get_state(f, s.m, s.z) != BINGHAM_OK) {
-        fprintf(stderr, "get_state failed\n");
-        exit(1);
-    }
-    return s;
-}
-
-static int same(snapshot a, snapshot b) { return memcmp(&a, &b, sizeof a) == 0; }
 
 static int last_error_names(const char *fn) {
     char msg[1024];
@@ -443,14 +412,6 @@ static void givens_orthogonal(size_t d, double phase, double *m) {
     }
 }
 
-static void normalize_vec(double *v, size_t d) {
-    double n = 0;
-    size_t i;
-    for (i = 0; i < d; ++i) n += v[i] * v[i];
-    n = sqrt(n);
-    for (i = 0; i < d; ++i) v[i] /= n;
-}
-
 /* 2 (ll(y_hat) - ll(y)) clamped at 0, from bingham_filter_log_likelihood. */
 static double surprise_from_ll(const bingham_filter *f, const double *y_hat, const double *y, const double *mv,
                                const double *zv) {
@@ -490,7 +451,7 @@ static void test_surprise(size_t d) {
         if (zv[i] > zv[top]) top = i;
     for (i = 0; i < d; ++i) v_hat[i] = mv[i * d + top];
     group_mul(d, x_hat, v_hat, y_hat);
-    normalize_vec(y_hat, d);
+    normalize(y_hat, d);
 
     /* at y_hat itself: 0 */
     CHECK_OK(bingham_filter_surprise(f, y_hat, mv, zv, &s));
@@ -696,14 +657,7 @@ static void test_threads(const scenario *s) {
 int main(void) {
     scenario sc[2];
     int i;
-    long ps = sysconf(_SC_PAGESIZE);
-    page_size = ps > 0 ? (size_t)ps : 4096;
-    guard_pages = mmap(NULL, 2 * page_size, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS,
-                       -1, 0);
-    if (guard_pages == MAP_FAILED || mprotect(guard_pages + page_size, page_size, PROT_NONE)) {
-        perror("mmap/mprotect");
-        return 1;
-    }
+    if (guard_pages_init()) return 1;
     sc[0] = scenario_2d();
     sc[1] = scenario_4d();
     for (i = 0; i < 2; ++i) {

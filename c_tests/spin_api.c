@@ -78,6 +78,11 @@ typedef struct {
     double mx[16], zx[4], mv[16], zv[4], mw[16], zw[4], mo[16], zo[4], u[4], y[4];
 } spin_params;
 
+/* The a-th state array of q in the order of the arguments: m_x, z_x, m_v, z_v. */
+static double *state_array(spin_params *q, size_t a) {
+    return a == 0 ? q->mx : (a == 1 ? q->zx : (a == 2 ? q->mv : q->zv));
+}
+
 static spin_params params(void) {
     spin_params p;
     double zx[4] = {-5, -1, -3, 0}, zv[4] = {0, -3, -3, -3}, zw[4] = {0, -400, -400, -10},
@@ -153,12 +158,7 @@ static void test_spin_new(void) {
             double bad[3] = {NAN, INFINITY, -INFINITY};
             for (k = 0; k < 3; ++k) {
                 spin_params q = p;
-                double *arr[4];
-                arr[0] = q.mx;
-                arr[1] = q.zx;
-                arr[2] = q.mv;
-                arr[3] = q.zv;
-                arr[a][i] = bad[k];
+                state_array(&q, a)[i] = bad[k];
                 CHECK_STATUS(bingham_spin_filter_new(q.mx, q.zx, q.mv, q.zv, &out), BINGHAM_ERR_INVALID_ARGUMENT);
                 CHECK_MESSAGE(fn, entry_needle(names[a], i));
                 CHECK(out == sentinel);
@@ -467,12 +467,12 @@ static void test_spin_const_and_state(void) {
         for (i = 0; i < 40; ++i) CHECK(sm[i] == 777.0);
         /* into buffers flush against the inaccessible page: exactly 16 and 4 entries written */
         {
-            double *mx = (double *)(guard_pages + page_size) - 16;
+            double *mx = no_access() - 16;
             CHECK_OK(bingham_spin_filter_get_state(f, mx, sm + 16, sm + 20, sm + 36));
             CHECK(memcmp(mx, s.mx, sizeof s.mx) == 0);
         }
         {
-            double *zv = (double *)(guard_pages + page_size) - 4;
+            double *zv = no_access() - 4;
             CHECK_OK(bingham_spin_filter_get_state(f, sm, sm + 16, sm + 20, zv));
             CHECK(memcmp(zv, s.zv, sizeof s.zv) == 0);
         }
@@ -574,12 +574,7 @@ static void test_spin_const_and_state(void) {
                              fn, null_needle(names[a]));
             for (i = 0; i < (a % 2 ? 4u : 16u); ++i) {
                 spin_params q = p;
-                double *arr[4];
-                arr[0] = q.mx;
-                arr[1] = q.zx;
-                arr[2] = q.mv;
-                arr[3] = q.zv;
-                arr[a][i] = (i % 3 == 0) ? NAN : ((i % 3 == 1) ? INFINITY : -INFINITY);
+                state_array(&q, a)[i] = (i % 3 == 0) ? NAN : ((i % 3 == 1) ? INFINITY : -INFINITY);
                 CHECK_SPIN_FAILS(f, bingham_spin_filter_set_state(f, q.mx, q.zx, q.mv, q.zv),
                                  BINGHAM_ERR_INVALID_ARGUMENT, fn, entry_needle(names[a], i));
             }

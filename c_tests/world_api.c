@@ -23,23 +23,6 @@
 #include "check.h"
 #include "api_util.h"
 
-/* The state of the filter handle (d = 2 or 4) as raw bytes, for bit-for-bit comparisons. */
-typedef struct {
-    double m[16], z[4];
-} snapshot;
-
-static snapshot snap(const bingham_filter *f) {
-    snapshot s;
-    memset(&s, 0, sizeof s);
-    if (bingham_filter_get_state(f, s.m, s.z) != BINGHAM_OK) {
-        fprintf(stderr, "bingham_filter_get_state failed\n");
-        exit(1);
-    }
-    return s;
-}
-
-static int same(snapshot a, snapshot b) { return memcmp(&a, &b, sizeof a) == 0; }
-
 /* Expects `call` to fail with `expected`, the state of the filter `f` bit for bit unchanged and
  * the last message naming `fn` and containing `needle` (if not NULL). */
 #define CHECK_FILTER_FAILS(f, call, expected, fn, needle)                                        \
@@ -49,6 +32,32 @@ static int same(snapshot a, snapshot b) { return memcmp(&a, &b, sizeof a) == 0; 
         CHECK(same(check_before_, snap(f)));                                                     \
         CHECK_MESSAGE(fn, needle);                                                               \
     } while (0)
+
+/* The inputs of a world-frame step (a vector of d, a d x d matrix, a vector of d: arrays of 4,
+ * 16, 4) with entry i of their concatenation replaced by a bad value: bad[0] in the first vector,
+ * bad[1] in the matrix, bad[2] in the last one; `needle` names that entry ("`m_w[3]`"). */
+typedef struct {
+    double v[4], m[16], z[4];
+    char needle[64];
+} bad_inputs;
+
+static bad_inputs bad_entry(size_t d, size_t i, const double *v, const double *m, const double *z,
+                            const double bad[3], const char *const names[3]) {
+    bad_inputs b;
+    size_t dd = d * d;
+    memcpy(b.v, v, sizeof b.v);
+    memcpy(b.m, m, sizeof b.m);
+    memcpy(b.z, z, sizeof b.z);
+    if (i < d)
+        b.v[i] = bad[0];
+    else if (i < d + dd)
+        b.m[i - d] = bad[1];
+    else
+        b.z[i - d - dd] = bad[2];
+    strcpy(b.needle, i < d ? entry_needle(names[0], i)
+                           : (i < d + dd ? entry_needle(names[1], i - d) : entry_needle(names[2], i - d - dd)));
+    return b;
+}
 
 /* ---- the world-frame steps of the filter handle ------------------------------------------ */
 
@@ -88,19 +97,11 @@ static void test_world_steps(size_t d) {
         CHECK_FILTER_FAILS(f, bingham_filter_predict_world(f, NULL, NULL, zw), BINGHAM_ERR_NULL_ARGUMENT, fn,
                            "`m_w` is NULL");
         for (i = 0; i < d + dd + d; ++i) {
-            double uu[4], mm[16], zz[4];
-            memcpy(uu, u, sizeof uu);
-            memcpy(mm, mw, sizeof mm);
-            memcpy(zz, zw, sizeof zz);
-            if (i < d)
-                uu[i] = NAN;
-            else if (i < d + dd)
-                mm[i - d] = INFINITY;
-            else
-                zz[i - d - dd] = -INFINITY;
-            CHECK_FILTER_FAILS(f, bingham_filter_predict_world(f, uu, mm, zz), BINGHAM_ERR_INVALID_ARGUMENT, fn,
-                               i < d ? entry_needle("u", i)
-                                     : (i < d + dd ? entry_needle("m_w", i - d) : entry_needle("z_w", i - d - dd)));
+            const double bad_values[3] = {NAN, INFINITY, -INFINITY};
+            const char *const names[3] = {"u", "m_w", "z_w"};
+            bad_inputs b = bad_entry(d, i, u, mw, zw, bad_values, names);
+            CHECK_FILTER_FAILS(f, bingham_filter_predict_world(f, b.v, b.m, b.z), BINGHAM_ERR_INVALID_ARGUMENT, fn,
+                               b.needle);
         }
         for (k = 0; k < 3; ++k) {
             double s = k == 0 ? 1 + 2e-3 : (k == 1 ? 1 - 2e-3 : 0);
@@ -140,19 +141,11 @@ static void test_world_steps(size_t d) {
         CHECK_FILTER_FAILS(f, bingham_filter_update_world(f, y, NULL, zv), BINGHAM_ERR_NULL_ARGUMENT, fn, "`m_v` is NULL");
         CHECK_FILTER_FAILS(f, bingham_filter_update_world(f, y, mv, NULL), BINGHAM_ERR_NULL_ARGUMENT, fn, "`z_v` is NULL");
         for (i = 0; i < d + dd + d; ++i) {
-            double yy[4], mm[16], zz[4];
-            memcpy(yy, y, sizeof yy);
-            memcpy(mm, mv, sizeof mm);
-            memcpy(zz, zv, sizeof zz);
-            if (i < d)
-                yy[i] = -INFINITY;
-            else if (i < d + dd)
-                mm[i - d] = NAN;
-            else
-                zz[i - d - dd] = INFINITY;
-            CHECK_FILTER_FAILS(f, bingham_filter_update_world(f, yy, mm, zz), BINGHAM_ERR_INVALID_ARGUMENT, fn,
-                               i < d ? entry_needle("y", i)
-                                     : (i < d + dd ? entry_needle("m_v", i - d) : entry_needle("z_v", i - d - dd)));
+            const double bad_values[3] = {-INFINITY, NAN, INFINITY};
+            const char *const names[3] = {"y", "m_v", "z_v"};
+            bad_inputs b = bad_entry(d, i, y, mv, zv, bad_values, names);
+            CHECK_FILTER_FAILS(f, bingham_filter_update_world(f, b.v, b.m, b.z), BINGHAM_ERR_INVALID_ARGUMENT, fn,
+                               b.needle);
         }
         for (k = 0; k < 3; ++k) {
             double sc = k == 0 ? 1 + 2e-3 : (k == 1 ? 1 - 2e-3 : 0);
@@ -204,19 +197,11 @@ static void test_world_steps(size_t d) {
         CHECK_STATUS(bingham_filter_log_likelihood_world(f, y, mv, zv, NULL), BINGHAM_ERR_NULL_ARGUMENT);
         CHECK_MESSAGE(fn, "`log_l` is NULL");
         for (i = 0; i < d + dd + d; ++i) {
-            double yy[4], mm[16], zz[4];
-            memcpy(yy, y, sizeof yy);
-            memcpy(mm, mv, sizeof mm);
-            memcpy(zz, zv, sizeof zz);
-            if (i < d)
-                yy[i] = NAN;
-            else if (i < d + dd)
-                mm[i - d] = -INFINITY;
-            else
-                zz[i - d - dd] = NAN;
-            CHECK_STATUS(bingham_filter_log_likelihood_world(f, yy, mm, zz, &ll2), BINGHAM_ERR_INVALID_ARGUMENT);
-            CHECK_MESSAGE(fn, i < d ? entry_needle("y", i)
-                                    : (i < d + dd ? entry_needle("m_v", i - d) : entry_needle("z_v", i - d - dd)));
+            const double bad_values[3] = {NAN, -INFINITY, NAN};
+            const char *const names[3] = {"y", "m_v", "z_v"};
+            bad_inputs b = bad_entry(d, i, y, mv, zv, bad_values, names);
+            CHECK_STATUS(bingham_filter_log_likelihood_world(f, b.v, b.m, b.z, &ll2), BINGHAM_ERR_INVALID_ARGUMENT);
+            CHECK_MESSAGE(fn, b.needle);
         }
         for (i = 0; i < d; ++i) vv[i] = y[i] * 1.01;
         CHECK_STATUS(bingham_filter_log_likelihood_world(f, vv, mv, zv, &ll2), BINGHAM_ERR_INVALID_ARGUMENT);
