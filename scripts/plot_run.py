@@ -11,9 +11,10 @@ a multiple of pi to lie within pi/2 of the truth). Only the standard library is 
 written directly), so ``make demo`` needs nothing beyond Python 3.
 """
 
-import csv
 import math
 import sys
+
+from svg_plot import nice_ticks, read_columns
 
 W, H = 900, 480
 LEFT, RIGHT, TOP, BOTTOM = 70, 20, 40, 60
@@ -27,34 +28,11 @@ COLORS = {
 }
 
 
-def read(path):
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
-    if not rows:
-        raise SystemExit(f"{path}: no data")
-    cols = {k: [float(r[k]) for r in rows] for k in rows[0]}
-    return cols
-
-
-def nice_ticks(lo, hi, n=6):
-    span = hi - lo
-    raw = span / n
-    mag = 10 ** math.floor(math.log10(raw))
-    step = min((m * mag for m in (1, 2, 5, 10) if m * mag >= raw), default=10 * mag)
-    first = math.ceil(lo / step) * step
-    ticks = []
-    t = first
-    while t <= hi + 1e-9 * span:
-        ticks.append(round(t, 10))
-        t += step
-    return ticks
-
-
 def main(argv):
     if len(argv) != 3:
         print(__doc__, file=sys.stderr)
         return 2
-    c = read(argv[1])
+    c = read_columns(argv[1])
     deg = 180 / math.pi
     steps = c["step"]
     series = {k: [v * deg for v in c[k]] for k in c if k != "step"}

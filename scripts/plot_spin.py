@@ -12,12 +12,14 @@ fractions):
     BINGHAM_SPIN_CSV=spin.csv cargo test --release --test glover_spin
     python3 scripts/plot_spin.py $CARGO_TARGET_DIR/spin.csv docs/spin_tracking.svg
 
-Only the standard library is used (the SVG is written directly), like ``scripts/plot_run.py``.
+Only the standard library is used (the SVG is written directly; axis ticks and the CSV reader
+shared with ``scripts/plot_run.py`` in ``scripts/svg_plot.py``).
 """
 
-import csv
 import math
 import sys
+
+from svg_plot import nice_ticks, read_columns
 
 PANEL_W, H = 470, 450
 LEFT, RIGHT, TOP, BOTTOM = 62, 16, 44, 150
@@ -32,28 +34,6 @@ SERIES = [
     ("ekf2", "EKF-2", "#d62728", 1.8, ""),
     ("ekf2_reported", "EKF-2, reported interpretation", "#d62728", 1.3, "2 3"),
 ]
-
-
-def read(path):
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
-    if not rows:
-        raise SystemExit(f"{path}: no data")
-    return {k: [float(r[k]) for r in rows] for k in rows[0]}
-
-
-def nice_ticks(lo, hi, n=6):
-    span = hi - lo
-    raw = span / n
-    mag = 10 ** math.floor(math.log10(raw))
-    step = min((m * mag for m in (1, 2, 5, 10) if m * mag >= raw), default=10 * mag)
-    first = math.ceil(lo / step) * step
-    ticks = []
-    t = first
-    while t <= hi + 1e-9 * span:
-        ticks.append(round(t, 10))
-        t += step
-    return ticks
 
 
 def panel(add, x0, c, frames, suffix, ylabel, title, ymax, chance=None):
@@ -114,7 +94,7 @@ def main(argv):
     if len(argv) != 3:
         print(__doc__, file=sys.stderr)
         return 2
-    c = read(argv[1])
+    c = read_columns(argv[1])
     frames = c["frame"]
     out = []
     add = out.append

@@ -7,7 +7,7 @@
 use std::os::raw::{c_int, c_void};
 
 use super::args::{args, Arg, Opt, ValueOut};
-use super::filter::{bingham_filter, noise_step};
+use super::filter::bingham_filter;
 use super::guard::{guard, handle, handle_mut, Failure, FfiResult};
 use super::status::bingham_status;
 use crate::filter::{NonlinearMethod, NonlinearOptions, NonlinearReport};
@@ -367,6 +367,35 @@ unsafe fn read_options(opts: *const bingham_nonlinear_options) -> FfiResult<Nonl
     Ok(o)
 }
 
+/// The frame both nonlinear steps share: the handle, the callback (NULL refused), the report
+/// place (NULL: not wanted; checked before anything runs), the options; `step` runs the step
+/// and its report is stored only on success.
+///
+/// # Safety
+/// `f`: NULL or a live handle; `opts`: NULL or readable; `report`: NULL or writable.
+unsafe fn nonlinear_step<C>(
+    f: *mut bingham_filter,
+    callback: Option<C>,
+    opts: *const bingham_nonlinear_options,
+    report: *mut bingham_nonlinear_report,
+    step: impl FnOnce(&mut bingham_filter, C, &NonlinearOptions) -> FfiResult<NonlinearReport>,
+) -> FfiResult<()> {
+    // SAFETY: caller contract.
+    let filter = unsafe { handle_mut("f", f)? };
+    let callback = callback.ok_or_else(|| Failure::null("fn"))?;
+    let out = Opt::when(!report.is_null(), ValueOut::new("report", report));
+    out.check()?;
+    // SAFETY: caller contract.
+    let options = unsafe { read_options(opts)? };
+    let r = step(filter, callback, &options)?;
+    // SAFETY: checked above; every input has been read.
+    if let Some(place) = unsafe { out.take()? } {
+        // SAFETY: as above.
+        unsafe { place.set(to_c_report(&r)) };
+    }
+    Ok(())
+}
+
 /// The shared body of the predictions.
 ///
 /// # Safety
@@ -380,43 +409,29 @@ unsafe fn predict(
     opts: *const bingham_nonlinear_options,
     report: *mut bingham_nonlinear_report,
 ) -> FfiResult<()> {
-    // SAFETY: caller contract.
-    let filter = unsafe { handle_mut("f", f)? };
-    let callback = callback.ok_or_else(|| Failure::null("fn"))?;
-    let out = Opt::when(!report.is_null(), ValueOut::new("report", report));
-    out.check()?;
-    // SAFETY: caller contract.
-    let options = unsafe { read_options(opts)? };
-    let transition = |x: &[f64], out: &mut [f64]| -> Result<(), String> {
-        out.fill(f64::NAN);
-        // SAFETY: `x` and `out` are library-owned arrays of d doubles, valid for the call;
-        // the callback's own contract is the caller's (see `bingham_transition_fn`).
-        let rc = unsafe { callback(x.as_ptr(), out.as_mut_ptr(), user_data) };
-        if rc != 0 {
-            Err(format!("callback returned {rc}"))
-        } else {
-            Ok(())
-        }
+    let step = |filter: &mut bingham_filter,
+                callback: unsafe extern "C" fn(*const f64, *mut f64, *mut c_void) -> c_int,
+                options: &NonlinearOptions| {
+        let transition = |x: &[f64], out: &mut [f64]| -> Result<(), String> {
+            out.fill(f64::NAN);
+            // SAFETY: `x` and `out` are library-owned arrays of d doubles, valid for the call;
+            // the callback's own contract is the caller's (see `bingham_transition_fn`).
+            let rc = unsafe { callback(x.as_ptr(), out.as_mut_ptr(), user_data) };
+            if rc != 0 {
+                Err(format!("callback returned {rc}"))
+            } else {
+                Ok(())
+            }
+        };
+        let d = filter.inner.dim();
+        // SAFETY: caller contract: `m_w` d*d and `z_w` d readable doubles.
+        let (m, z) = unsafe { args!(m_w: [d * d], z_w: [d]).read()? };
+        Ok(filter
+            .inner
+            .predict_nonlinear_opts(transition, m, z, options)?)
     };
-    let noise = [("m_w", m_w), ("z_w", z_w)];
-    let mut measured = None;
-    // SAFETY: caller contract.
-    unsafe {
-        noise_step(filter.inner.dim(), (), noise, (), |(), m, z| {
-            measured = Some(
-                filter
-                    .inner
-                    .predict_nonlinear_opts(transition, m, z, &options)?,
-            );
-            Ok(())
-        })?
-    };
-    // SAFETY: checked above; every input has been read.
-    if let (Some(place), Some(r)) = (unsafe { out.take()? }, measured) {
-        // SAFETY: as above.
-        unsafe { place.set(to_c_report(&r)) };
-    }
-    Ok(())
+    // SAFETY: forwarded caller contract.
+    unsafe { nonlinear_step(f, callback, opts, report, step) }
 }
 
 /// The shared body of the updates.
@@ -430,29 +445,22 @@ unsafe fn update(
     opts: *const bingham_nonlinear_options,
     report: *mut bingham_nonlinear_report,
 ) -> FfiResult<()> {
-    // SAFETY: caller contract.
-    let filter = unsafe { handle_mut("f", f)? };
-    let callback = callback.ok_or_else(|| Failure::null("fn"))?;
-    let out = Opt::when(!report.is_null(), ValueOut::new("report", report));
-    out.check()?;
-    // SAFETY: caller contract.
-    let options = unsafe { read_options(opts)? };
-    let log_l = |x: &[f64]| -> Result<f64, String> {
-        let mut value = f64::NAN;
-        // SAFETY: `x` is a library-owned array of d doubles and `value` a local double,
-        // both valid for the call; the callback's contract is the caller's.
-        let rc = unsafe { callback(x.as_ptr(), &mut value, user_data) };
-        if rc != 0 {
-            Err(format!("callback returned {rc}"))
-        } else {
-            Ok(value)
-        }
+    let step = |filter: &mut bingham_filter,
+                callback: unsafe extern "C" fn(*const f64, *mut f64, *mut c_void) -> c_int,
+                options: &NonlinearOptions| {
+        let log_l = |x: &[f64]| -> Result<f64, String> {
+            let mut value = f64::NAN;
+            // SAFETY: `x` is a library-owned array of d doubles and `value` a local double,
+            // both valid for the call; the callback's contract is the caller's.
+            let rc = unsafe { callback(x.as_ptr(), &mut value, user_data) };
+            if rc != 0 {
+                Err(format!("callback returned {rc}"))
+            } else {
+                Ok(value)
+            }
+        };
+        Ok(filter.inner.update_nonlinear_opts(log_l, options)?)
     };
-    let r = filter.inner.update_nonlinear_opts(log_l, &options)?;
-    // SAFETY: checked above; every input has been read.
-    if let Some(place) = unsafe { out.take()? } {
-        // SAFETY: as above.
-        unsafe { place.set(to_c_report(&r)) };
-    }
-    Ok(())
+    // SAFETY: forwarded caller contract.
+    unsafe { nonlinear_step(f, callback, opts, report, step) }
 }

@@ -127,14 +127,9 @@ impl<const D: usize> Core<D> {
         z_v: &[f64],
         likelihood_m: impl Fn(&Mat<D>) -> Mat<D>,
     ) -> Result<f64> {
-        let built;
-        let noise = match self.measurement.lookup(m_v, z_v) {
-            Some(n) => n,
-            None => {
-                built = NoiseCache::<D>::build(Role::Measurement, m_v, z_v)?;
-                &built
-            }
-        };
+        let noise = self
+            .measurement
+            .lookup_or_build(Role::Measurement, m_v, z_v)?;
         let log_f_noise = noise.log_f()?;
         let p = congruence(&likelihood_m(&noise.m), &noise.z);
         let value = self.log_likelihood_precision(&p)? - log_f_noise;

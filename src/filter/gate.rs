@@ -16,7 +16,7 @@
 use nalgebra::Const;
 
 use super::core::Core;
-use super::noise::{NoiseCache, Role};
+use super::noise::Role;
 use super::Vect;
 use crate::canonical::unit;
 use crate::error::{Error, Result};
@@ -35,14 +35,9 @@ impl<const D: usize> Core<D> {
     /// `2 (log p(ŷ) − log p(y))`, clamped at 0 (module documentation).
     pub(super) fn surprise(&self, measurement: &[f64], m_v: &[f64], z_v: &[f64]) -> Result<f64> {
         let y = unit("measurement", Const::<D>, measurement)?;
-        let built;
-        let noise = match self.measurement.lookup(m_v, z_v) {
-            Some(n) => n,
-            None => {
-                built = NoiseCache::<D>::build(Role::Measurement, m_v, z_v)?;
-                &built
-            }
-        };
+        let noise = self
+            .measurement
+            .lookup_or_build(Role::Measurement, m_v, z_v)?;
         // the noise's mode: the direction of its largest concentration
         let top = (0..D).fold(0, |b, i| if noise.z[i] > noise.z[b] { i } else { b });
         let v_hat: Vect<D> = noise.m.column(top).into_owned();

@@ -7,6 +7,8 @@ use std::sync::OnceLock;
 
 use super::{Mat, Vect, MAX_CONCENTRATION};
 use crate::canonical::params_row_major;
+use std::borrow::Cow;
+
 use crate::distribution::{log_f_omega, omega};
 use crate::error::{Error, Result};
 use crate::linalg::congruence;
@@ -91,6 +93,20 @@ impl<const D: usize> NoiseCache<D> {
                 .zip(m.iter().chain(z))
                 .all(|(k, v)| *k == v.to_bits());
         same.then_some(e)
+    }
+
+    /// The cached entry for these parameters, or one built for this call only (not stored:
+    /// for the `&self` readouts, which must not change the filter).
+    pub(super) fn lookup_or_build(
+        &self,
+        role: Role,
+        m: &[f64],
+        z: &[f64],
+    ) -> Result<Cow<'_, Noise<D>>> {
+        match self.lookup(m, z) {
+            Some(n) => Ok(Cow::Borrowed(n)),
+            None => Ok(Cow::Owned(Self::build(role, m, z)?)),
+        }
     }
 
     /// Validates and prepares a noise (no caching).

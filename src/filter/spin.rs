@@ -287,14 +287,9 @@ impl SpinFilter {
     /// Errors: as for [`SpinFilter::step`]'s observation.
     pub fn log_likelihood(&self, y: &[f64], m_o: &[f64], z_o: &[f64]) -> Result<f64> {
         let y = unit("y", Const::<4>, y)?;
-        let built;
-        let o = match self.observation.lookup(m_o, z_o) {
-            Some(o) => o,
-            None => {
-                built = NoiseCache::<4>::build(Role::Observation, m_o, z_o)?;
-                &built
-            }
-        };
+        let o = self
+            .observation
+            .lookup_or_build(Role::Observation, m_o, z_o)?;
         let log_f_o = o.log_f()?;
         let ax = composed_moment(&self.x.m, &self.x.z)?;
         let av = self.spin_moment()?;
