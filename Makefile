@@ -53,7 +53,7 @@ EIGEN3_INCLUDE_DIR ?= /usr/include/eigen3
 VENV := $(abspath $(TARGET_DIR))/venv
 VENV_PYTHON := $(VENV)/bin/python
 
-.PHONY: build header demo broad venv test deps fmt-check clippy rust-test python-test install install-test \
+.PHONY: build header demo demo-programs broad venv test deps fmt-check clippy rust-test python-test install install-test \
         uninstall clean sanitize valgrind fuzz long
 
 build:
@@ -62,20 +62,32 @@ build:
 header:
 	BINGHAM_WRITE_HEADER=1 $(CARGO) test --release --test header
 
-demo: deps build venv
+# The example programs, each rebuilt only when its source, the headers or the static library
+# changed (a rerun of `make demo` on an unchanged tree compiles nothing).
+DEMO_C := $(wildcard examples/c/*.c)
+DEMO_CXX11 := $(wildcard examples/c/*.cpp)
+DEMO_CXX17 := $(wildcard examples/cpp/*.cpp)
+DEMO_SRCS := $(DEMO_C) $(DEMO_CXX11) $(DEMO_CXX17)
+DEMO_HEADERS := $(wildcard include/*.h include/*.hpp)
+
+$(DEMO_DIR)/%: examples/c/%.c $(RELEASE)/libbingham.a $(DEMO_HEADERS)
 	@mkdir -p $(DEMO_DIR)
-	@set -e; for src in examples/c/*.c examples/c/*.cpp examples/cpp/*.cpp; do \
-	  [ -e "$$src" ] || continue; \
-	  exe=$(DEMO_DIR)/$$(basename "$${src%.*}"); \
-	  case "$$src" in \
-	    *.c)   $(CC) -std=c99 -O2 -Wall -Wextra -Werror -pedantic -Iinclude "$$src" \
-	             $(RELEASE)/libbingham.a $(STATIC_LIBS) -o "$$exe" ;; \
-	    examples/cpp/*) $(CXX) -std=c++17 -O2 -Wall -Wextra -Werror -pedantic -Iinclude \
-	             -isystem $(EIGEN3_INCLUDE_DIR) "$$src" $(RELEASE)/libbingham.a $(STATIC_LIBS) -o "$$exe" ;; \
-	    *.cpp) $(CXX) -std=c++11 -O2 -Wall -Wextra -Werror -pedantic -Iinclude "$$src" \
-	             $(RELEASE)/libbingham.a $(STATIC_LIBS) -o "$$exe" ;; \
-	  esac; \
-	  echo "==== $$src"; "$$exe"; echo; \
+	$(CC) -std=c99 -O2 -Wall -Wextra -Werror -pedantic -Iinclude $< $(RELEASE)/libbingham.a $(STATIC_LIBS) -o $@
+$(DEMO_DIR)/%: examples/c/%.cpp $(RELEASE)/libbingham.a $(DEMO_HEADERS)
+	@mkdir -p $(DEMO_DIR)
+	$(CXX) -std=c++11 -O2 -Wall -Wextra -Werror -pedantic -Iinclude $< $(RELEASE)/libbingham.a $(STATIC_LIBS) -o $@
+$(DEMO_DIR)/%: examples/cpp/%.cpp $(RELEASE)/libbingham.a $(DEMO_HEADERS)
+	@mkdir -p $(DEMO_DIR)
+	$(CXX) -std=c++17 -O2 -Wall -Wextra -Werror -pedantic -Iinclude -isystem $(EIGEN3_INCLUDE_DIR) $< \
+	  $(RELEASE)/libbingham.a $(STATIC_LIBS) -o $@
+
+# `build` (cargo) may refresh the archive; the programs are made after it.
+demo-programs: build
+	@$(MAKE) -s --no-print-directory $(foreach src,$(DEMO_SRCS),$(DEMO_DIR)/$(basename $(notdir $(src))))
+
+demo: deps build venv demo-programs
+	@set -e; for src in $(DEMO_SRCS); do \
+	  echo "==== $$src"; $(DEMO_DIR)/$$(basename "$${src%.*}"); echo; \
 	done
 	@echo "==== plot of one run of examples/c/axis_tracking.c (truth, Bingham mode with 95 % interval, Kalman)"
 	@$(DEMO_DIR)/axis_tracking $(DEMO_DIR)/axis_tracking_run.csv > /dev/null
@@ -135,12 +147,18 @@ python-test: venv
 # broad: `pip install ./python` with BINGHAM_PREBUILT_LIB ships the libbingham.so that `build`
 # made (debug info stripped) instead of compiling the crate again through setuptools-rust, so
 # one build serves the C library and the Python package. --system-site-packages reuses NumPy,
-# pytest, vqf and ahrs of the system Python (`make deps`). Reinstalled on every run.
+# pytest, vqf and ahrs of the system Python (`make deps`). Reinstalled when the library or a file
+# of the package changed (the stamp $(VENV)/.installed).
 venv: build
+	@$(MAKE) -s --no-print-directory $(VENV)/.installed
+	@$(VENV_PYTHON) -c 'import bingham; print("bingham", bingham.__version__, "loads", bingham.library_path())'
+
+# (re)installed when the library or a file of the package changed
+$(VENV)/.installed: $(RELEASE)/libbingham.so $(shell find python -path python/build -prune -o -type f \( -name '*.py' -o -name '*.toml' -o -name '*.cfg' -o -name 'py.typed' \) -not -path '*/tests/*' -print 2>/dev/null)
 	@test -x $(VENV_PYTHON) || $(PYTHON) -m venv --system-site-packages $(VENV)
 	BINGHAM_PREBUILT_LIB=$(abspath $(RELEASE)/libbingham.so) \
 	  $(VENV_PYTHON) -m pip install --disable-pip-version-check --progress-bar off ./python
-	@$(VENV_PYTHON) -c 'import bingham; print("bingham", bingham.__version__, "loads", bingham.library_path())'
+	@touch $@
 
 # Installs into a temporary prefix and builds/runs a C++11 program against it via pkg-config.
 install-test: build
