@@ -5,7 +5,8 @@
 //! At every correction (module `ahrs`, step 5) the low-passed accelerometer direction `ā` and
 //! the heading error `δ` of the averaged field are compared with the prediction before the
 //! correction, each normalized by the variance it should have if the model held: the state's
-//! own spread in that direction (from the prior's precision `Λ`, `Σ = Λ⁺`, body frame) plus the
+//! own spread in that direction (from the prior's precision `Λ`, `Σ = (Λ + 3/π² I)⁻¹`, body
+//! frame: no angle's variance exceeds a uniform angle's, π²/3) plus the
 //! measurement's (`acc_noise²·(1 + ((|ā| − g)/acc_reject)²)` for the direction of "up",
 //! `mag_noise²` for the heading — the parameters' own meaning). With `b̂` the predicted
 //! body-frame "up" and `e` the tilt innovation (the angle between `b̂` and `ā` along the great
@@ -35,6 +36,8 @@
 //! upside-down world explains the samples as well as the right one — except through the sign
 //! of the dip: the Earth's field points below the horizon north of the magnetic equator, so a
 //! negative dip there means a flipped accelerometer (or magnetometer).
+
+use std::f64::consts::PI;
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -148,7 +151,12 @@ impl HealthState {
         if let Some(x) = gravity_excess {
             self.gravity.push(x * x, alpha);
         }
-        let sigma = pinv(lam);
+        // The state's covariance (rad²). An angle's error cannot have a larger variance than a
+        // uniformly unknown angle's, π²/3: adding that precision, 3/π², to every direction
+        // keeps a direction the state knows nothing about (a heading before the first field)
+        // from counting as a certain one (the pseudo-inverse would give it variance 0) and
+        // changes a well-known direction's variance by a negligible fraction.
+        let sigma = pinv(&(lam + Matrix3::identity() * (3.0 / (PI * PI))));
         let bh = Vector3::from(*b_hat);
         if let Some((b, var_a)) = tilt {
             let b = Vector3::from(*b);
@@ -211,6 +219,18 @@ mod tests {
     }
 
     #[test]
+    fn an_unknown_heading_makes_no_heading_innovation_surprising() {
+        // tilt known to 0.01 rad, heading not at all (precision 0 about up): a heading error
+        // of 3 rad counts against the variance of a uniform angle, π²/3, not against 0
+        let lam = Matrix3::from_diagonal(&Vector3::new(1e4, 1e4, 0.0));
+        let mut h = HealthState::default();
+        h.correction(0.02, &lam, &[0.0, 0.0, 1.0], None, Some((3.0, 1e-4)), None);
+        let r = h.readout(None);
+        assert!(r.heading_score < 3.0, "{}", r.heading_score);
+        assert!(r.heading_score > 2.0, "{}", r.heading_score);
+    }
+
+    #[test]
     fn a_tilt_innovation_of_one_standard_deviation_scores_one_half_per_axis() {
         // prior precision 1/σ² isotropic, measurement variance 0: an innovation of σ along
         // one tangent direction gives ν = 1, per degree of freedom 1/2
@@ -220,7 +240,10 @@ mod tests {
         let b = [sd.sin(), 0.0, sd.cos()];
         h.correction(0.02, &lam, &[0.0, 0.0, 1.0], Some((&b, 0.0)), None, None);
         let r = h.readout(None);
-        assert!((r.tilt_score - 0.5).abs() < 1e-6, "{}", r.tilt_score);
+        // the variance is 1/(1/σ² + 3/π²): ν = σ²·(1/σ² + 3/π²)
+        let reg = 3.0 / (PI * PI);
+        let want = 0.5 * (1.0 + reg * sd * sd);
+        assert!((r.tilt_score - want).abs() < 1e-12, "{}", r.tilt_score);
         assert!((r.tilt_innovation - sd).abs() < 1e-12);
         // the heading variance adds the prior's spread about up and the measurement's
         h.correction(
@@ -232,7 +255,12 @@ mod tests {
             Some(0.5),
         );
         let r = h.readout(Some(-1.0));
-        assert!((r.heading_score - 2.0).abs() < 1e-9, "{}", r.heading_score);
+        let var = 1.0 / (1.0 / (sd * sd) + reg) + sd * sd;
+        assert!(
+            (r.heading_score - 4.0 * sd * sd / var).abs() < 1e-9,
+            "{}",
+            r.heading_score
+        );
         assert_eq!(r.score, r.heading_score);
         assert!((r.gravity_score - 0.25).abs() < 1e-12);
         assert_eq!(r.mag_dip, 1.0);
