@@ -151,12 +151,8 @@ impl HealthState {
         if let Some(x) = gravity_excess {
             self.gravity.push(x * x, alpha);
         }
-        // The state's covariance (rad²). An angle's error cannot have a larger variance than a
-        // uniformly unknown angle's, π²/3: adding that precision, 3/π², to every direction
-        // keeps a direction the state knows nothing about (a heading before the first field)
-        // from counting as a certain one (the pseudo-inverse would give it variance 0) and
-        // changes a well-known direction's variance by a negligible fraction.
-        let sigma = pinv(&(lam + Matrix3::identity() * (3.0 / (PI * PI))));
+        // The state's covariance (rad², body frame; see `covariance`).
+        let sigma = covariance(lam);
         let bh = Vector3::from(*b_hat);
         if let Some((b, var_a)) = tilt {
             let b = Vector3::from(*b);
@@ -169,10 +165,7 @@ impl HealthState {
             } else {
                 Vector3::zeros()
             };
-            let k = bh.cross_matrix();
-            let p = Matrix3::identity() - bh * bh.transpose();
-            let s = p * (k * sigma * k.transpose()) * p + p * var_a;
-            let nis = (e.transpose() * pinv(&s) * e)[0];
+            let nis = tilt_nis(&sigma, &bh, &e, var_a);
             self.tilt.push(nis / 2.0, alpha);
             self.tilt_innovation = angle;
         }
@@ -202,6 +195,49 @@ impl HealthState {
             mag_dip: dip_above.map_or(0.0, |d| -d),
             has_mag_reference: i32::from(dip_above.is_some()),
         }
+    }
+}
+
+/// The state's covariance (rad², body frame) from its precision `lam`: `(Λ + 3/π² I)⁻¹`. An
+/// angle's error cannot have a larger variance than a uniformly unknown angle's, π²/3: adding
+/// that precision, 3/π², to every direction keeps a direction the state knows nothing about (a
+/// heading before the first field) from counting as a certain one (a pseudo-inverse would give
+/// it variance 0) and changes a well-known direction's variance by a negligible fraction. `Λ`
+/// is positive semi-definite, so the sum is positive definite and a Cholesky factorization
+/// inverts it (the eigendecomposition of [`pinv`] only for a matrix that is not, e.g. NaN).
+fn covariance(lam: &Matrix3<f64>) -> Matrix3<f64> {
+    let a = lam + Matrix3::identity() * (3.0 / (PI * PI));
+    match a.cholesky() {
+        Some(c) => c.inverse(),
+        None => pinv(&a),
+    }
+}
+
+/// The normalized tilt innovation `ν_a = eᵀ S⁺ e`, `S = P [b̂]× Σ [b̂]×ᵀ P + σ_a² P` (module
+/// documentation), computed in an orthonormal basis `u₁, u₂` of the plane perpendicular to
+/// `b̂` (the unit predicted "up"), where `S` is the positive definite 2×2 matrix
+/// `[[u₂ᵀΣu₂ + σ_a², −u₁ᵀΣu₂], [−u₁ᵀΣu₂, u₁ᵀΣu₁ + σ_a²]]` (`[b̂]×ᵀ u₁ = −u₂`,
+/// `[b̂]×ᵀ u₂ = u₁`) and `e = e₁u₁ + e₂u₂` lies in that plane.
+fn tilt_nis(sigma: &Matrix3<f64>, bh: &Vector3<f64>, e: &Vector3<f64>, var_a: f64) -> f64 {
+    // a unit vector perpendicular to b̂: from the axis least aligned with it
+    let axis = if bh.x.abs() <= bh.y.abs() && bh.x.abs() <= bh.z.abs() {
+        Vector3::x()
+    } else if bh.y.abs() <= bh.z.abs() {
+        Vector3::y()
+    } else {
+        Vector3::z()
+    };
+    let u1 = bh.cross(&axis).normalize();
+    let u2 = bh.cross(&u1);
+    let s11 = (u2.transpose() * sigma * u2)[0] + var_a;
+    let s22 = (u1.transpose() * sigma * u1)[0] + var_a;
+    let s12 = -(u1.transpose() * sigma * u2)[0];
+    let (e1, e2) = (u1.dot(e), u2.dot(e));
+    let det = s11 * s22 - s12 * s12;
+    if det > 0.0 {
+        (s22 * e1 * e1 - 2.0 * s12 * e1 * e2 + s11 * e2 * e2) / det
+    } else {
+        0.0
     }
 }
 
@@ -265,5 +301,53 @@ mod tests {
         assert!((r.gravity_score - 0.25).abs() < 1e-12);
         assert_eq!(r.mag_dip, 1.0);
         assert_eq!(r.has_mag_reference, 1);
+    }
+    #[test]
+    fn the_tangent_plane_form_equals_the_pseudo_inverse_of_the_3x3_innovation_covariance() {
+        // the definition ν = eᵀ (P [b̂]× Σ [b̂]×ᵀ P + σ² P)⁺ e and Σ = pinv(Λ + 3/π² I) against
+        // the Cholesky inverse and the 2×2 form, for states of every conditioning
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for case in 0..200 {
+            let a = Matrix3::from_fn(|_, _| next());
+            let scale = 10f64.powf(6.0 * next().abs());
+            let mut lam = a * a.transpose() * scale;
+            if case % 4 == 0 {
+                // one direction unknown (a heading before the first field)
+                lam[(2, 2)] = 0.0;
+                lam[(0, 2)] = 0.0;
+                lam[(1, 2)] = 0.0;
+                lam[(2, 0)] = 0.0;
+                lam[(2, 1)] = 0.0;
+            }
+            let reference = pinv(&(lam + Matrix3::identity() * (3.0 / (PI * PI))));
+            let sigma = covariance(&lam);
+            assert!(
+                (sigma - reference).norm() <= 1e-9 * reference.norm(),
+                "case {case}"
+            );
+            let bh = Vector3::new(next(), next(), next()).normalize();
+            let raw = Vector3::new(next(), next(), next()) * 0.01;
+            let e = raw - bh * bh.dot(&raw);
+            let var_a = if case % 3 == 0 {
+                0.0
+            } else {
+                1e-4 * next().abs()
+            };
+            let k = bh.cross_matrix();
+            let p = Matrix3::identity() - bh * bh.transpose();
+            let s = p * (k * reference * k.transpose()) * p + p * var_a;
+            let want = (e.transpose() * pinv(&s) * e)[0];
+            let got = tilt_nis(&sigma, &bh, &e, var_a);
+            assert!(
+                (got - want).abs() <= 1e-8 * want.abs().max(1e-300),
+                "case {case}: {got} vs {want}"
+            );
+        }
     }
 }
