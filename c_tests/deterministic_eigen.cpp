@@ -103,11 +103,11 @@ static void check_samples(const MatrixXd &m, const VectorXd &z, const Samples &s
         wsum += wk;
         VectorXd x = Eigen::Map<const VectorXd>(&s.points[k * d], d);
         CHECK(std::fabs(x.norm() - 1) < 1e-14);
-        S += wk * x * x.transpose();
+        add_outer(S, wk, x);
         VectorXd y = m.transpose() * x;
         CHECK(y(mode) >= -1e-15);  // the mode's hemisphere
         VectorXd y2 = y.cwiseProduct(y);
-        Y4 += wk * y2 * y2.transpose();
+        add_outer(Y4, wk, y2);
         ys.push_back(y);
     }
     // odd fourth moments E[y_i^3 y_j] (i != j) and E[y_i^2 y_j y_l] (j < l, both != i), each
@@ -552,9 +552,9 @@ static void test_update_non_bingham(int d) {
             for (const Node &nd : nodes) {
                 double ll;
                 quartic_cb(nd.x.data(), &ll, &q);
-                double e = nd.w * std::exp(nd.x.dot(A * nd.x) + ll);
+                double e = nd.w * std::exp(quad_form(A, nd.x) + ll);
                 mass += e;
-                S += e * nd.x * nd.x.transpose();
+                add_outer(S, e, nd.x);
             }
             S /= mass;
             q.calls = 0;

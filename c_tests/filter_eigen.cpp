@@ -51,9 +51,9 @@ static void moments(const MatrixXd &A, double &log_f, MatrixXd &S) {
     double F = 0;
     S = MatrixXd::Zero(d, d);
     for (const Node &nd : nodes(d)) {
-        double e = nd.w * std::exp(nd.x.dot(A * nd.x) - top);
+        double e = nd.w * std::exp(quad_form(A, nd.x) - top);
         F += e;
-        S += e * nd.x * nd.x.transpose();
+        add_outer(S, e, nd.x);
     }
     S /= F;
     log_f = std::log(F) + top;
@@ -65,10 +65,10 @@ static MatrixXd rotated_moment(const MatrixXd &A, const VectorXd &u) {
     double top = Eigen::SelfAdjointEigenSolver<MatrixXd>(A).eigenvalues().maxCoeff(), F = 0;
     MatrixXd S = MatrixXd::Zero(d, d);
     for (const Node &nd : nodes(d)) {
-        double e = nd.w * std::exp(nd.x.dot(A * nd.x) - top);
+        double e = nd.w * std::exp(quad_form(A, nd.x) - top);
         VectorXd y = compose_vectors(nd.x, u);
         F += e;
-        S += e * y * y.transpose();
+        add_outer(S, e, y);
     }
     return S / F;
 }
@@ -235,7 +235,7 @@ static void test_log_likelihood(int d) {
         double integral = 0;
         for (const Node &nd : nodes(d)) {
             VectorXd v = compose_vectors(conjugate(nd.x), y);  // x^-1 (+) z
-            integral += nd.w * std::exp(nd.x.dot(As * nd.x) - lf_s + v.dot(Av * v) - lf_v);
+            integral += nd.w * std::exp(quad_form(As, nd.x) - lf_s + quad_form(Av, v) - lf_v);
         }
         CHECK_OK(bingham_filter_log_likelihood(f, y.data(), mvr.data(), zv.data(), &ll));
         CHECK_CLOSE(ll, std::log(integral), 1e-10);

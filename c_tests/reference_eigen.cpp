@@ -56,11 +56,11 @@ static Reference reference(const MatrixXd &A) {
     r.X4 = MatrixXd::Zero(d, d);
     r.EA = 0;
     for (const Node &nd : nodes_for(d)) {
-        double q = nd.x.dot(A * nd.x), e = nd.w * std::exp(q);
+        double q = quad_form(A, nd.x), e = nd.w * std::exp(q);
         r.F += e;
-        r.S += e * nd.x * nd.x.transpose();
+        add_outer(r.S, e, nd.x);
         VectorXd sq = nd.x.cwiseProduct(nd.x);
-        r.X4 += e * sq * sq.transpose();
+        add_outer(r.X4, e, sq);
         r.EA += e * q;
     }
     r.S /= r.F;
@@ -158,7 +158,7 @@ static void test_moments_pdf_entropy_kl_mode() {
             CHECK_OK(bingham_log_pdf(d, mr.data(), z.data(), n, x.data(), lp.data()));
             for (int k = 0; k < n; ++k) {
                 VectorXd v = Eigen::Map<const VectorXd>(&x[k * d], d);
-                double q = v.dot(a * v);
+                double q = quad_form(a, v);
                 CHECK_CLOSE(p[k] / (std::exp(q) / r.F), 1.0, 1e-11);
                 CHECK_CLOSE(lp[k], q - std::log(r.F), 1e-11);
             }
@@ -172,7 +172,7 @@ static void test_moments_pdf_entropy_kl_mode() {
             Reference r2 = reference(a2);
             double kl_ref = 0;
             for (const Node &nd : nodes_for(d)) {
-                double q1 = nd.x.dot(a * nd.x), q2 = nd.x.dot(a2 * nd.x);
+                double q1 = quad_form(a, nd.x), q2 = quad_form(a2, nd.x);
                 kl_ref += nd.w * std::exp(q1) / r.F * ((q1 - std::log(r.F)) - (q2 - std::log(r2.F)));
             }
             std::vector<double> m2r = row_major(m2);
@@ -250,7 +250,7 @@ static void test_mle() {
             x.insert(x.end(), v.data(), v.data() + d);
             double wk = 0.1 + (k % 7);
             w.push_back(wk);
-            t += wk * v * v.transpose();
+            add_outer(t, wk, v);
             t1 += v * v.transpose();
             wsum += wk;
         }

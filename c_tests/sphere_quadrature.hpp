@@ -18,6 +18,28 @@ struct Node {
     double w;
 };
 
+// x^T A x and S += e x x^T without Eigen temporaries: the quadrature loops run 10^5 to 10^6
+// times per reference, and a dynamic-size temporary is a heap allocation per node, which
+// dominated the programs' run time under AddressSanitizer (its allocator is slow by design).
+template <class MA, class VX>
+static inline double quad_form(const Eigen::MatrixBase<MA> &A, const Eigen::MatrixBase<VX> &x) {
+    double q = 0;
+    for (Eigen::Index j = 0; j < x.size(); ++j) {
+        double c = 0;
+        for (Eigen::Index i = 0; i < x.size(); ++i) c += A(i, j) * x(i);
+        q += c * x(j);
+    }
+    return q;
+}
+
+template <class MS, class VY>
+static inline void add_outer(Eigen::MatrixBase<MS> &S, double e, const Eigen::MatrixBase<VY> &y) {
+    for (Eigen::Index j = 0; j < y.size(); ++j) {
+        double c = e * y(j);
+        for (Eigen::Index i = 0; i < y.size(); ++i) S(i, j) += c * y(i);
+    }
+}
+
 // Gauss-Legendre nodes and weights on [a, b].
 static void gauss_legendre(int n, double a, double b, std::vector<double> &t, std::vector<double> &w) {
     t.assign(n, 0.0);

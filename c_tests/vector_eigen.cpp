@@ -73,7 +73,7 @@ static void test_vector_observation() {
             double scale = std::max(1.0, kappa);
             for (int k = 0; k < 50; ++k) {
                 VectorXd q = random_unit(rng, 4);
-                double lhs = q.dot(A * q) - top;
+                double lhs = quad_form(A, q) - top;
                 double rhs = kappa * r.dot(rotation(q) * b) - kappa;
                 if (std::fabs(lhs - rhs) > 1e-12 * scale) ++worst_fail;
             }
@@ -178,7 +178,7 @@ static VectorXd spread_from_moment(const MatrixXd &S) {
     VectorXd w = es.eigenvalues(), out(d);
     VectorXd mode = es.eigenvectors().col(d - 1);
     for (int i = 0; i + 1 < d; ++i) out(i) = k * std::sqrt(std::max(0.0, w(i)));
-    out(d - 1) = k * std::sqrt(std::max(0.0, 1 - mode.dot(S * mode)));
+    out(d - 1) = k * std::sqrt(std::max(0.0, 1 - quad_form(S, mode)));
     return out;
 }
 
@@ -187,9 +187,9 @@ static MatrixXd quadrature_moment4(const MatrixXd &A) {
     double top = Eigen::SelfAdjointEigenSolver<MatrixXd>(A).eigenvalues().maxCoeff(), F = 0;
     MatrixXd S = MatrixXd::Zero(4, 4);
     for (const Node &nd : nodes4()) {
-        double e = nd.w * std::exp(nd.x.dot(A * nd.x) - top);
+        double e = nd.w * std::exp(quad_form(A, nd.x) - top);
         F += e;
-        S += e * nd.x * nd.x.transpose();
+        add_outer(S, e, nd.x);
     }
     return S / F;
 }
@@ -249,7 +249,7 @@ static void test_log_likelihood_vector() {
         double p0 = 0;
         CHECK_OK(bingham_pdf(4, mr.data(), z.data(), 1, x0.data(), &p0));
         MatrixXd A = exponent(m, z);
-        double a0 = x0.dot(A * x0);
+        double a0 = quad_form(A, x0);
         for (size_t k = 0; k < n; ++k) p[k] = p0 * std::exp(nodes[k].x.dot(A * nodes[k].x) - a0);
         bingham_filter *f = NULL;
         CHECK_OK(bingham_filter_new(4, mr.data(), z.data(), &f));

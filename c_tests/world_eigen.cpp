@@ -170,7 +170,7 @@ static double exponent_difference(const Dist &a, const Dist &b) {
 static double log_normalizer(const MatrixXd &P) {
     int d = (int)P.rows();
     double top = Eigen::SelfAdjointEigenSolver<MatrixXd>(P).eigenvalues().maxCoeff(), F = 0;
-    for (const Node &nd : nodes(d)) F += nd.w * std::exp(nd.x.dot(P * nd.x) - top);
+    for (const Node &nd : nodes(d)) F += nd.w * std::exp(quad_form(P, nd.x) - top);
     return std::log(F) + top;
 }
 
@@ -181,7 +181,7 @@ static double world_log_likelihood_quadrature(const Dist &state, const Dist &noi
     double lf_s = log_normalizer(As), lf_v = log_normalizer(Av), integral = 0;
     for (const Node &nd : nodes(d)) {
         VectorXd v = compose_vectors(y, conjugate(nd.x));  // y o x^-1
-        integral += nd.w * std::exp(nd.x.dot(As * nd.x) - lf_s + v.dot(Av * v) - lf_v);
+        integral += nd.w * std::exp(quad_form(As, nd.x) - lf_s + quad_form(Av, v) - lf_v);
     }
     return std::log(integral);
 }

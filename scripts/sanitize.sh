@@ -17,7 +17,11 @@ set -euo pipefail
 ensure_library
 OUT="$TARGET_DIR/sanitize"
 mkdir -p "$OUT"
-FLAGS=(-g -O2 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all)
+# -O1 -g1: the optimization level the sanitizers' documentation suggests, and line tables
+# (function, file and line in every report) without the full debug information of Eigen's
+# templates; the Eigen programs then compile in about half the time of -O2 -g (reference_eigen.cpp
+# 55 s -> 29 s on the 2-core CI VM) and run about 15 % slower.
+FLAGS=(-g1 -O1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all)
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
 export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
 
