@@ -25,7 +25,7 @@ use nalgebra::Const;
 use super::core::{composed_moment, log_evidence};
 use super::noise::{NoiseCache, Role};
 use super::world::{conjugation, world_likelihood_m};
-use super::{Mat, Vect};
+use super::{Mat, Vect, MAX_CONCENTRATION};
 use crate::canonical::{params_row_major, unit};
 use crate::distribution::{bayes_product, omega, Bingham};
 use crate::error::{Error, Result};
@@ -259,9 +259,11 @@ impl SpinFilter {
             &compose_moments(&w_moment, &a_post),
             self.warm.spin.as_ref(),
         )?;
+        let v_moment = fitted_moment(&mvn, &zvn, &warm_v);
 
         self.x = x;
         self.v = Marginal { m: mvn, z: zvn };
+        self.v_moment = v_moment;
         self.warm = Warm {
             orientation: Some(warm_x),
             evidence: warm_g,
@@ -306,6 +308,18 @@ impl SpinFilter {
     }
 }
 
+/// The second moment of the fitted `Bingham(m, z)` (the output of [`fit_second_moment`] with its
+/// solution `sol`) without evaluating `ω(z)`: `M diag(ω) Mᵀ` with the `ω` the solver evaluated
+/// at its last point, the same bits [`composed_moment`] computes when that point is `z` itself
+/// (the solver's `z` already canonical, and within `MAX_CONCENTRATION`); `None` otherwise.
+fn fitted_moment(m: &Mat<4>, z: &Vect<4>, sol: &Derivs<Const<4>>) -> Option<Mat<4>> {
+    let same = z
+        .iter()
+        .zip(sol.z.iter())
+        .all(|(a, b)| a.to_bits() == b.to_bits() && *a >= -MAX_CONCENTRATION);
+    same.then(|| congruence(m, &sol.grad))
+}
+
 /// The observation's exponent in `x` (`M_L Z_o M_Lᵀ`, `M_L = R(y) D M_o`) and the second moment
 /// of `Bingham(Z_o, M_L)` (`R(y) D S_o D R(y)ᵀ` from the noise's moment `S_o`).
 fn observation_terms(y: &Vect<4>, m_o: &Mat<4>, z_o: &Vect<4>, s_o: &Mat<4>) -> ObservationTerms {
@@ -314,5 +328,42 @@ fn observation_terms(y: &Vect<4>, m_o: &Mat<4>, z_o: &Vect<4>, s_o: &Mat<4>) -> 
     ObservationTerms {
         precision: congruence(&ml, z_o),
         moment: r * s_o * r.transpose(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quaternion::q4;
+
+    /// The spin marginal's moment kept after a step is, bit for bit, the one evaluated from its
+    /// parameters: a filter that keeps it and one that re-evaluates it run the same.
+    #[test]
+    fn kept_spin_moment_is_the_evaluated_one() {
+        let id = [
+            1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ];
+        let (z_w, z_o) = ([0.0, -400.0, -400.0, -400.0], [0.0, -40.0, -40.0, -10.0]);
+        let spin = q4::from_rotation_vector(&[0.6, -0.5, 0.62]);
+        let mut f = SpinFilter::new(&id, &[0.0; 4], &id, &[0.0, -3.0, -3.0, -3.0]).unwrap();
+        let mut x = [0.5, 0.5, 0.5, 0.5];
+        let mut kept = 0;
+        for k in 0..120 {
+            x = q4::mul(&spin, &x);
+            // a small observation error, and every 7th step without an observation
+            let o = q4::from_rotation_vector(&[0.01 * (k % 5) as f64, -0.02, 0.005]);
+            let y = q4::mul(&o, &x);
+            let u = (k % 3 == 0).then_some(spin);
+            let obs = (k % 7 != 3).then_some(&y[..]);
+            f.step(u.as_ref().map(|u| &u[..]), &id, &z_w, obs, &id, &z_o)
+                .unwrap();
+            if let Some(a) = f.v_moment {
+                let b = composed_moment(&f.v.m, &f.v.z).unwrap();
+                let bits = |m: &Mat<4>| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&a), bits(&b), "step {k}");
+                kept += 1;
+            }
+        }
+        assert!(kept >= 110, "kept {kept} of 120");
     }
 }
