@@ -94,6 +94,22 @@ pub(crate) fn fit_second_moment<D: Dim>(
 where
     DefaultAllocator: Allocator<D, D> + Allocator<D>,
 {
+    fit_second_moment_nearest(s, warm)
+}
+
+/// [`fit_second_moment`] warm-started from the one of `starts` (previous solutions with their
+/// derivatives) whose moments `ω` are nearest the target's (the largest relative difference
+/// over the first `d − 1`, Newton's residual); cold without any. Only the start differs: the
+/// solution is the one every start converges to, within the same tolerance. A filter that
+/// keeps several previous solutions (the spin filter: its targets change shape from step to
+/// step but come back as the object turns) starts Newton closer and saves evaluations.
+pub(crate) fn fit_second_moment_nearest<'a, D: Dim>(
+    s: &Square<D>,
+    starts: impl IntoIterator<Item = &'a Derivs<D>>,
+) -> Result<(Square<D>, Vector<D>, Derivs<D>)>
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D>,
+{
     let tr: f64 = (0..s.nrows()).map(|i| s[(i, i)]).sum();
     if tr.is_nan() || tr <= 0.0 {
         return Err(Error::InvalidArgument(format!(
@@ -116,6 +132,21 @@ where
             l[0] / tr
         )));
     }
+    let sum: f64 = l.iter().sum();
+    let n = l.len();
+    let distance = |c: &Derivs<D>| -> f64 {
+        (0..n - 1)
+            .map(|i| {
+                let t = l[i] / sum;
+                ((c.grad[i] - t) / t).abs()
+            })
+            .fold(0.0, f64::max)
+    };
+    let warm = starts
+        .into_iter()
+        .map(|c| (distance(c), c))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, c)| c);
     let (sol, _) = match warm {
         Some(d) => solve_z(&l, Start::Evaluated(d)).or_else(|_| solve_z(&l, Start::Cold)),
         None => solve_z(&l, Start::Cold),
