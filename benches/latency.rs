@@ -1,6 +1,6 @@
 //! Worst-case latency: the distribution of the time of one call, not its median alone.
 //!
-//! `cargo bench --bench latency` prints p50, p99, p99.9 and the maximum of
+//! `cargo bench -p bingham-benches --bench latency` prints p50, p99, p99.9 and the maximum of
 //!
 //! - one filter step (predict + update), d = 2 and d = 4, each from a random state set with
 //!   `set_state` (so the moment matching starts cold, as after a re-initialization) with random
@@ -250,7 +250,7 @@ fn ahrs_samples(cases: usize, seed: u64) -> Summary {
 }
 
 fn main() {
-    // `cargo bench` passes `--bench`; `cargo test --benches` runs this with few cases.
+    // `cargo bench` passes `--bench`; `cargo test -p bingham-benches --benches` runs this with few cases.
     let quick = !std::env::args().any(|a| a == "--bench");
     let cases = std::env::var("BINGHAM_LATENCY_CASES")
         .ok()
