@@ -167,7 +167,7 @@ install-test: build
 # --- reliability ---------------------------------------------------------------------------
 
 # The C/C++ tests and examples built with -fsanitize=address,undefined against libbingham.a and
-# run with leak detection; fails if ASan is not really linked (about 2 min on 2 cores).
+# run with leak detection; fails if ASan is not really linked (about 2.5 min on 2 cores).
 sanitize: build
 	CARGO="$(CARGO)" CC="$(CC)" CXX="$(CXX)" scripts/sanitize.sh
 
