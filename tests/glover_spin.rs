@@ -77,54 +77,25 @@
 //! Figures and the comparison with the paper: `docs/accuracy.md`.
 
 mod glover_common;
+// the simulated balls and QBF-2, shared with tests/glover_spin_failures.rs
+#[path = "glover_common/ball.rs"]
+mod ball;
 // the second-order EKF ("EKF-2"), in its own file; it uses this file's observation model, so
 // only this test includes it
 #[path = "glover_common/ekf2.rs"]
 mod ekf2;
 
-use bingham::filter::{BinghamFilter, SpinFilter};
+use ball::*;
+use bingham::filter::BinghamFilter;
 use bingham::quaternion::q4;
 use bingham::Bingham;
 use ekf2::{Dark, Ekf2, EkfNoise};
-use glover_common::{angle, draw, lmat, m_with_mode, mul, normalized, rmat, I4, Q};
+use glover_common::{angle, lmat, m_with_mode, mul, normalized, rmat, I4, Q};
 use nalgebra::Vector4;
 use rand::rngs::StdRng;
-use rand::{Rng, SeedableRng};
-use std::f64::consts::PI;
+use rand::SeedableRng;
 use std::fmt::Write as _;
 use std::path::PathBuf;
-
-const IDENTITY: Q = [1.0, 0.0, 0.0, 0.0];
-const FRAMES: usize = 40;
-const PER_TYPE: usize = 20;
-const TYPES: usize = 12;
-const MIN_DETECTIONS: usize = 8;
-const SEED: u64 = 2013;
-
-/// Noises with the identity as mode, `m = I`: concentrations on `(1, i, j, k)`.
-const Z_PROCESS: [f64; 4] = [0.0, -400.0, -400.0, -400.0];
-const Z_DETECT: [f64; 4] = [0.0, -40.0, -40.0, -10.0];
-const Z_DARK: [f64; 4] = [0.0, -3.6, -3.6, 0.0];
-const Z_JITTER: [f64; 4] = [0.0, -4000.0, -4000.0, -4000.0];
-/// Spin priors, with `m_with_mode` (the mode last).
-const Z_SPIN_PRIOR: [f64; 4] = [-3.0, -3.0, -3.0, 0.0];
-const Z_BANK_PRIOR: [f64; 4] = [-10.0, -10.0, -10.0, 0.0];
-
-const TOWARD_CAMERA: [f64; 3] = [0.0, 0.0, 1.0];
-/// The logo's normal in the body frame.
-const LOGO: [f64; 3] = [0.0, 0.0, 1.0];
-/// 180° about the logo's normal: `y` and `y ∘ FLIP` look the same.
-const FLIP: Q = [0.0, 0.0, 0.0, 1.0];
-/// The orientation with the logo in the centre of the back side (180° about x: body z → −z).
-const Y_DARK: Q = [0.0, 1.0, 0.0, 0.0];
-const FPS: f64 = 200.0;
-const REV_PER_S: [f64; 3] = [25.0, 37.5, 50.0];
-const AXES: [(&str, [f64; 3]); 4] = [
-    ("top-spin", [0.0, 1.0, 0.0]),
-    ("under-spin", [0.0, -1.0, 0.0]),
-    ("left side-spin", [0.0, 0.0, 1.0]),
-    ("right side-spin", [0.0, 0.0, -1.0]),
-];
 
 const METHODS: [&str; 8] = [
     "QBF-2",
@@ -155,151 +126,6 @@ const EKF2: usize = 4;
 const EKF2_NO_DARK: usize = 5;
 const EKF2_DARK_GAUSSIAN: usize = 6;
 const EKF2_REPORTED: usize = 7;
-
-// ---------------------------------------------------------------------------------------------
-// the logo and the spin types
-
-fn logo_faces_camera(x: &Q) -> bool {
-    let d = q4::rotate(x, &LOGO);
-    d.iter()
-        .zip(&TOWARD_CAMERA)
-        .map(|(a, b)| a * b)
-        .sum::<f64>()
-        > 0.0
-}
-
-/// The mean spin (rotation per frame) of spin type `k` (axis `k / 3`, speed `k % 3`).
-fn type_mean(k: usize) -> Q {
-    let a = AXES[k / 3].1;
-    let rate = 2.0 * PI * REV_PER_S[k % 3] / FPS;
-    q4::from_rotation_vector(&[a[0] * rate, a[1] * rate, a[2] * rate])
-}
-
-fn log_mean_exp(a: f64, b: f64) -> f64 {
-    let m = a.max(b);
-    m + (0.5 * ((a - m).exp() + (b - m).exp())).ln()
-}
-
-// ---------------------------------------------------------------------------------------------
-// the simulation
-
-#[derive(Debug, Clone, Copy)]
-enum Obs {
-    Logo(Q),
-    Dark,
-}
-
-struct Trajectory {
-    kind: usize,
-    spin: Q,
-    x: Vec<Q>,
-    obs: Vec<Obs>,
-    redrawn: usize,
-}
-
-struct Noises {
-    uniform: Bingham,
-    process: Bingham,
-    detect: Bingham,
-    jitter: Bingham,
-}
-
-fn simulate(kind: usize, index: usize, n: &Noises) -> Trajectory {
-    let mut rng = StdRng::seed_from_u64(SEED * 1_000_003 + (kind * 1000 + index) as u64);
-    let spin = normalized(&mul(&draw(&n.process, &mut rng), &type_mean(kind)));
-    let mut redrawn = 0;
-    loop {
-        let mut x = draw(&n.uniform, &mut rng);
-        let (mut xs, mut obs) = (Vec::with_capacity(FRAMES), Vec::with_capacity(FRAMES));
-        let mut detections = 0;
-        for _ in 0..FRAMES {
-            x = normalized(&mul(&mul(&draw(&n.jitter, &mut rng), &spin), &x));
-            xs.push(x);
-            if logo_faces_camera(&x) {
-                detections += 1;
-                let mut y = normalized(&mul(&draw(&n.detect, &mut rng), &x));
-                if rng.gen_bool(0.5) {
-                    y = mul(&y, &FLIP);
-                }
-                obs.push(Obs::Logo(y));
-            } else {
-                obs.push(Obs::Dark);
-            }
-        }
-        if detections >= MIN_DETECTIONS {
-            return Trajectory {
-                kind,
-                spin,
-                x: xs,
-                obs,
-                redrawn,
-            };
-        }
-        redrawn += 1;
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// the Bingham filters
-
-/// The type whose mean spin has the highest density under `b` (the normalization is common).
-fn classify(b: &Bingham, means: &[Q]) -> usize {
-    let mut best = (f64::NEG_INFINITY, 0);
-    for (k, m) in means.iter().enumerate() {
-        let e = b.log_pdf_given(m, 0.0).expect("exponent");
-        if e > best.0 {
-            best = (e, k);
-        }
-    }
-    best.1
-}
-
-/// QBF-2: the spin filter with the noises it assumes.
-#[derive(Clone)]
-struct Qbf2 {
-    f: SpinFilter,
-    total: f64,
-    z_process: [f64; 4],
-    z_detect: [f64; 4],
-}
-
-impl Qbf2 {
-    fn new(spin_mode: &Q, z_v: &[f64; 4]) -> Qbf2 {
-        Qbf2::with_noises(spin_mode, z_v, Z_PROCESS, Z_DETECT)
-    }
-
-    fn with_noises(spin_mode: &Q, z_v: &[f64; 4], z_process: [f64; 4], z_detect: [f64; 4]) -> Qbf2 {
-        Qbf2 {
-            f: SpinFilter::new(&I4, &[0.0; 4], &m_with_mode(spin_mode), z_v).expect("spin filter"),
-            total: 0.0,
-            z_process,
-            z_detect,
-        }
-    }
-
-    fn frame(&mut self, obs: &Obs, what: &str) {
-        let ll = |y: &Q, z: &[f64]| {
-            self.f
-                .log_likelihood(y, &I4, z)
-                .unwrap_or_else(|e| panic!("{what}: log_likelihood: {e}"))
-        };
-        let (y, z) = match obs {
-            Obs::Logo(y) => {
-                let y2 = mul(y, &FLIP);
-                let (a, b) = (ll(y, &self.z_detect), ll(&y2, &self.z_detect));
-                self.total += log_mean_exp(a, b);
-                (if a >= b { *y } else { y2 }, self.z_detect)
-            }
-            Obs::Dark => {
-                self.total += ll(&Y_DARK, &Z_DARK);
-                (Y_DARK, Z_DARK)
-            }
-        };
-        self.f
-            .step(None, &I4, &self.z_process, Some(&y), &I4, &z)
-            .unwrap_or_else(|e| panic!("{what}: step: {e}"));
-    }
-}
 
 struct Qbf1 {
     f: BinghamFilter,
@@ -614,16 +440,6 @@ fn report(r: &Record) {
     }
 }
 
-fn noises(z_detect: &[f64; 4]) -> Noises {
-    let b = |z: &[f64; 4]| Bingham::from_row_major(4, &I4, z).unwrap();
-    Noises {
-        uniform: b(&[0.0; 4]),
-        process: b(&Z_PROCESS),
-        detect: b(z_detect),
-        jitter: b(&Z_JITTER),
-    }
-}
-
 #[test]
 fn spin_tracking_on_simulated_ping_pong_balls() {
     let noises = noises(&Z_DETECT);
@@ -687,69 +503,6 @@ fn spin_tracking_on_simulated_ping_pong_balls() {
     assert!(r.rate(EKF2, 30) < r30, "EKF-2 classifies as well as QBF-2");
     // without the choice of interpretation the EKF is lost (37.9 %)
     assert!(r.rate(EKF2_REPORTED, 30) < 0.5);
-}
-
-/// QBF-2 alone on the same trajectories with other noise levels: what sets its spin error.
-/// Returns the mean spin error and classification rate at frame 30.
-fn qbf2_only(z_detect_truth: &[f64; 4], z_process: [f64; 4], z_detect: [f64; 4]) -> (f64, f64) {
-    let noises = noises(z_detect_truth);
-    let means: Vec<Q> = (0..TYPES).map(type_mean).collect();
-    let (mut e, mut h, mut n) = (0.0, 0.0, 0.0);
-    for kind in 0..TYPES {
-        for index in 0..PER_TYPE {
-            let t = simulate(kind, index, &noises);
-            let mut f = Qbf2::with_noises(&IDENTITY, &Z_SPIN_PRIOR, z_process, z_detect);
-            for obs in &t.obs[..30] {
-                f.frame(obs, "sensitivity");
-            }
-            e += angle(&f.f.spin_mode(), &t.spin);
-            h += f64::from(u8::from(classify(&f.f.spin(), &means) == t.kind));
-            n += 1.0;
-        }
-    }
-    (e / n, h / n)
-}
-
-/// What sets QBF-2's spin error: the filter's assumed process noise (the paper's `(−400)³` lets
-/// the spin wander 7° per frame; the simulated spin is constant) and the detection noise (drawn
-/// here from the paper's Λo itself, 26° RMS about the line of sight; the paper's final logo
-/// errors of 6–7° suggest its detections were better than its Λo). Detections drawn from
-/// `(−400, −400, −100)` (λ × 10, angles / √10), with the filter told or still assuming the
-/// paper's Λo; the filter's process noise `(−4000)³`; both.
-#[test]
-fn spin_error_depends_on_the_noise_levels() {
-    let tight = [0.0, -400.0, -400.0, -100.0];
-    let slow = [0.0, -4000.0, -4000.0, -4000.0];
-    let cases = [
-        ("as in the main test", Z_DETECT, Z_PROCESS, Z_DETECT),
-        ("filter process noise (-4000)^3", Z_DETECT, slow, Z_DETECT),
-        (
-            "detections (-400,-400,-100), filter told",
-            tight,
-            Z_PROCESS,
-            tight,
-        ),
-        (
-            "detections (-400,-400,-100), filter not told",
-            tight,
-            Z_PROCESS,
-            Z_DETECT,
-        ),
-        ("both, filter told", tight, slow, tight),
-    ];
-    println!("QBF-2 at frame 30 (spin error rad / classification %):");
-    let mut out = Vec::new();
-    for (name, truth, process, detect) in cases {
-        let (e, h) = qbf2_only(&truth, process, detect);
-        println!("  {name:<46} {e:.3} / {:.1}", 100.0 * h);
-        out.push((e, h));
-    }
-    // measured: 0.379, 0.342, 0.179, 0.201, 0.134 rad
-    assert!(
-        out[2].0 < 0.6 * out[0].0 && out[3].0 < 0.6 * out[0].0,
-        "{out:?}"
-    );
-    assert!(out[4].0 < out[2].0, "{out:?}");
 }
 
 /// The paper's dark-side noise Λo = (−3.6, −3.6, 0) is the Bingham fitted to all orientations

@@ -9,8 +9,8 @@
 //! with `#[path]`, and it uses that test's observation model (`Obs`, `FLIP`, `Y_DARK`), noise
 //! concentrations and seed from the including crate's root.
 
+use crate::ball::{Obs, FLIP, IDENTITY, SEED, Y_DARK, Z_DARK, Z_DETECT, Z_PROCESS, Z_SPIN_PRIOR};
 use crate::glover_common::{dot, lmat, m_with_mode, mul, normalized, rmat, to_q, I4, Q};
-use crate::{Obs, FLIP, IDENTITY, SEED, Y_DARK, Z_DARK, Z_DETECT, Z_PROCESS, Z_SPIN_PRIOR};
 use bingham::Bingham;
 use nalgebra::{Matrix4, SMatrix, SVector, Vector4};
 use rand::rngs::StdRng;
