@@ -234,7 +234,18 @@ pub unsafe extern "C" fn bingham_ahrs_update_batch(
 ) -> bingham_status {
     guard("bingham_ahrs_update_batch", || {
         // SAFETY: forwarded caller contract.
-        unsafe { batch(a, n, gyr, acc, mag, quat, std::ptr::null_mut()) }
+        unsafe {
+            batch_health(
+                a,
+                n,
+                gyr,
+                acc,
+                mag,
+                quat,
+                std::ptr::null_mut(),
+                std::ptr::null_mut(),
+            )
+        }
     })
 }
 
@@ -257,7 +268,7 @@ pub unsafe extern "C" fn bingham_ahrs_update_batch_spread(
 ) -> bingham_status {
     guard("bingham_ahrs_update_batch_spread", || {
         // SAFETY: forwarded caller contract.
-        unsafe { batch(a, n, gyr, acc, mag, quat, spread) }
+        unsafe { batch_health(a, n, gyr, acc, mag, quat, spread, std::ptr::null_mut()) }
     })
 }
 
@@ -285,19 +296,10 @@ pub unsafe extern "C" fn bingham_ahrs_update_batch_health(
     })
 }
 
-unsafe fn batch(
-    a: *mut bingham_ahrs,
-    n: usize,
-    gyr: *const f64,
-    acc: *const f64,
-    mag: *const f64,
-    quat: *mut f64,
-    spread: *mut f64,
-) -> FfiResult<()> {
-    // SAFETY: forwarded caller contract.
-    unsafe { batch_health(a, n, gyr, acc, mag, quat, spread, std::ptr::null_mut()) }
-}
-
+/// Shared body of the three batch entry points (`spread`, `health`: `NULL` when not wanted).
+///
+/// # Safety
+/// The callers' contract.
 #[allow(clippy::too_many_arguments)]
 unsafe fn batch_health(
     a: *mut bingham_ahrs,
