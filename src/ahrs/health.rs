@@ -151,6 +151,9 @@ impl HealthState {
         if let Some(x) = gravity_excess {
             self.gravity.push(x * x, alpha);
         }
+        if tilt.is_none() && heading.is_none() {
+            return;
+        }
         // The state's covariance (rad², body frame; see `covariance`).
         let sigma = covariance(lam);
         let bh = Vector3::from(*b_hat);
