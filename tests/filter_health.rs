@@ -212,3 +212,47 @@ fn the_gate_applies_update_or_nothing() {
     }
     assert_eq!(c.state(), base.state());
 }
+
+/// The surprise is `2 (log p(ŷ) − log p(y))` clamped at 0: the same number as the difference of
+/// the two predictive log densities `log_likelihood` gives (which carries the state's and the
+/// noise's normalizers the surprise lets cancel), to rounding, over states and noises from
+/// broad to concentrated and measurements near and far.
+#[test]
+fn the_surprise_is_twice_the_drop_of_the_predictive_log_density() {
+    use rand::Rng;
+    let mut rng = StdRng::seed_from_u64(41);
+    let (mut checked, mut positive) = (0, 0);
+    for case in 0..300 {
+        let d = if case % 3 == 0 { 2 } else { 4 };
+        let lz = |rng: &mut StdRng| -(10f64.powf(rng.gen_range(-1.0..4.0)));
+        let mut zs: Vec<f64> = (0..d - 1).map(|_| lz(&mut rng)).collect();
+        zs.sort_by(f64::total_cmp);
+        zs.push(0.0);
+        let zv_rest: Vec<f64> = (0..d - 1).map(|_| lz(&mut rng)).collect();
+        // a random orthogonal M for the state (QR of a Gaussian matrix)
+        let g = DMatrix::<f64>::from_fn(d, d, |_, _| rng.gen_range(-1.0..1.0));
+        let q = g.qr().q();
+        let ms: Vec<f64> = (0..d * d).map(|k| q[(k / d, k % d)]).collect();
+        let f = BinghamFilter::new(d, &ms, &zs).unwrap();
+        // the noise about the identity, so ŷ is the state's mode
+        let (mv, zv) = about_identity(&zv_rest);
+        let y_hat = f.mode();
+        let mut y: Vec<f64> = y_hat.iter().map(|v| v + rng.gen_range(-0.3..0.3)).collect();
+        let n = y.iter().map(|v| v * v).sum::<f64>().sqrt();
+        y.iter_mut().for_each(|v| *v /= n);
+        let s = f.surprise(&y, &mv, &zv).unwrap();
+        let reference = (2.0
+            * (f.log_likelihood(&y_hat, &mv, &zv).unwrap()
+                - f.log_likelihood(&y, &mv, &zv).unwrap()))
+        .max(0.0);
+        let scale = 1.0 + reference.abs();
+        assert!(
+            (s - reference).abs() <= 1e-9 * scale,
+            "case {case}: surprise {s} against {reference}"
+        );
+        checked += 1;
+        positive += usize::from(reference > 0.1);
+    }
+    assert_eq!(checked, 300);
+    assert!(positive > 200, "only {positive} measurements off the mode");
+}

@@ -251,6 +251,24 @@ pub(crate) fn composed_moment<const D: usize>(m: &Mat<D>, z: &Vect<D>) -> Result
 /// `log ∫ f(x) exp(xᵀ P x) dx` (surface measure) for `f = Bingham(M, Z)`: with `λ` the largest
 /// eigenvalue of `M Z Mᵀ + P`, `log F(eig − λ) + λ − log F(Z)`.
 pub(crate) fn log_evidence<const D: usize>(m: &Mat<D>, z: &Vect<D>, p: &Mat<D>) -> Result<f64> {
+    let (lf_state, _) = log_f_omega(z)?;
+    let value = log_joint_normalizer(m, z, p)? - lf_state;
+    if !value.is_finite() {
+        return Err(Error::Numerical(format!(
+            "log-likelihood is not finite ({value})"
+        )));
+    }
+    Ok(value)
+}
+
+/// `log ∫ exp(xᵀ (M Z Mᵀ + P) x) dx` (surface measure): `log F(eig − λ) + λ`, `λ` the largest
+/// eigenvalue. [`log_evidence`] without the state's own normalizer, which cancels in a
+/// difference of two evidences of the same state (the surprise).
+pub(super) fn log_joint_normalizer<const D: usize>(
+    m: &Mat<D>,
+    z: &Vect<D>,
+    p: &Mat<D>,
+) -> Result<f64> {
     let (_, l) = product_eigen_precision(m, z, p)?;
     let top = l[D - 1];
     let zp = l.map(|v| v - top);
@@ -262,12 +280,5 @@ pub(crate) fn log_evidence<const D: usize>(m: &Mat<D>, z: &Vect<D>, p: &Mat<D>) 
         ));
     }
     let (lf_post, _) = log_f_omega(&zp)?;
-    let (lf_state, _) = log_f_omega(z)?;
-    let value = lf_post + top - lf_state;
-    if !value.is_finite() {
-        return Err(Error::Numerical(format!(
-            "log-likelihood is not finite ({value})"
-        )));
-    }
-    Ok(value)
+    Ok(lf_post + top)
 }

@@ -15,11 +15,12 @@
 
 use nalgebra::Const;
 
-use super::core::Core;
+use super::core::{log_joint_normalizer, Core};
 use super::noise::Role;
 use super::Vect;
 use crate::canonical::unit;
 use crate::error::{Error, Result};
+use crate::linalg::congruence;
 use crate::quaternion::left;
 
 /// The outcome of [`crate::filter::BinghamFilter::update_gated`].
@@ -43,8 +44,11 @@ impl<const D: usize> Core<D> {
         let v_hat: Vect<D> = noise.m.column(top).into_owned();
         let x_hat: Vect<D> = self.m.column(D - 1).into_owned();
         let y_hat: Vect<D> = left(Const::<D>, x_hat.as_slice()) * v_hat;
+        // The two predictive densities share the state's and the noise's normalizers, which
+        // cancel in the difference: only the two joint normalizers are evaluated.
         let at = |y: &Vect<D>| {
-            self.log_likelihood_with(m_v, z_v, |noise_m| Self::likelihood_m(y, noise_m))
+            let p = congruence(&Self::likelihood_m(y, &noise.m), &noise.z);
+            log_joint_normalizer(&self.m, &self.z, &p)
         };
         let s = 2.0 * (at(&y_hat)? - at(&y)?);
         if !s.is_finite() {
