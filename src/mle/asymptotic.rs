@@ -1,0 +1,261 @@
+//! The moment map of a concentrated Bingham as a series, and the curvature correction it gives
+//! Newton's step (d = 3, 4).
+//!
+//! With `z` sorted, `z_d = 0` and every other `z_j` far below it, `x` stays near `±e_d` and its
+//! other coordinates are nearly independent Gaussians of variances `s_j = 1/(2|z_j|)`. Expanding
+//! the sphere's measure in them (`(1 − r²)^{−1/2} = Σ_k C(2k, k) r^{2k}/4^k`, the Gaussian
+//! moments, exponentially small tails dropped) gives, for `i < d`, with sums over the other
+//! `j < d`, `j ≠ i` (`S = Σ s_j`, `Q = Σ s_j²`, `C = Σ s_j³`, `P = Σ_{j<l} s_j s_l`,
+//! `M = Σ_{j≠l} s_j² s_l`):
+//!
+//! `1/ω_i = 1/s_i − 1 − (3s_i + S) − 2(9s_i² + 3s_i S + 2Q + P)
+//!          − (153s_i³ + 54s_i² S + 36s_i Q + 18s_i P + 25C + 12M) + O(s⁴)`.
+//!
+//! Derived symbolically (series of the ratio of the two Gaussian expectations) for one and two
+//! other coordinates, i.e. d = 3 and 4; with three or more a term in their triple products
+//! appears at the last order, which is not derived, so larger d do not use it. The first two
+//! orders are those of the known start `1/ω_i ≈ 2|z_i| − 1 − Σ_j 1/(2|z_j|) − 1/|z_i|`.
+//!
+//! The MLE's Newton iteration solves `G(z) = 1/ω(z) − 1/ω̂ = 0`, where `G` is `2|z|` plus the
+//! series' lower terms: nearly linear, so one step from a warm start at a residual of 1e-2
+//! lands near 1e-6 (the spin filter's fits), just short of finishing in one more step. The
+//! series knows most of the curvature that is left: [`correct_step`] adds to Newton's step `Δ`
+//! (from the exact Hessian) the solution of `J δ = −N(Δ)`, `N` the series' departure from its
+//! tangent along `Δ`, so the step follows the curvature to second order. It only moves the
+//! point Newton evaluates next; the line search and the convergence test are unchanged, so the
+//! solution meets the same tolerance.
+
+/// The series is used where every concentration below the mode is at least this large
+/// (`s_j ≤ 1/16`) at both ends of the step. Chosen by counting evaluations over random d = 3, 4
+/// problems (|z_i| from 1 to 1e4, warm starts 1–20 % off): from 8 up the correction never costs
+/// an evaluation; from 3 to 5 it sometimes does (the terms stop decreasing fast enough to
+/// describe the curvature), and it gains little there.
+const MIN_CONCENTRATION: f64 = 8.0;
+
+/// A value with its derivative along one direction (forward-mode differentiation of the series).
+#[derive(Debug, Clone, Copy)]
+struct Jet {
+    v: f64,
+    d: f64,
+}
+
+impl std::ops::Add for Jet {
+    type Output = Jet;
+    fn add(self, o: Jet) -> Jet {
+        Jet {
+            v: self.v + o.v,
+            d: self.d + o.d,
+        }
+    }
+}
+
+impl std::ops::Mul for Jet {
+    type Output = Jet;
+    fn mul(self, o: Jet) -> Jet {
+        Jet {
+            v: self.v * o.v,
+            d: self.d * o.v + self.v * o.d,
+        }
+    }
+}
+
+impl std::ops::Mul<Jet> for f64 {
+    type Output = Jet;
+    fn mul(self, o: Jet) -> Jet {
+        Jet {
+            v: self * o.v,
+            d: self * o.d,
+        }
+    }
+}
+
+const ZERO: Jet = Jet { v: 0.0, d: 0.0 };
+
+/// The series' terms beyond `1/s_i − 1` for coordinate `i` of `s` (`s.len() ≤ 3`).
+fn higher_terms(s: &[Jet], i: usize) -> Jet {
+    let si = s[i];
+    let (mut sum, mut sq, mut cube, mut pairs, mut mixed) = (ZERO, ZERO, ZERO, ZERO, ZERO);
+    for (j, &sj) in s.iter().enumerate() {
+        if j == i {
+            continue;
+        }
+        sum = sum + sj;
+        sq = sq + sj * sj;
+        cube = cube + sj * sj * sj;
+        for (l, &sl) in s.iter().enumerate() {
+            if l != i && l != j {
+                mixed = mixed + sj * sj * sl;
+                if l > j {
+                    pairs = pairs + sj * sl;
+                }
+            }
+        }
+    }
+    let second = 3.0 * si + sum;
+    let third = 9.0 * (si * si) + 3.0 * (si * sum) + 2.0 * sq + pairs;
+    let fourth = 153.0 * (si * si * si)
+        + 54.0 * (si * si * sum)
+        + 36.0 * (si * sq)
+        + 18.0 * (si * pairs)
+        + 25.0 * cube
+        + 12.0 * mixed;
+    -1.0 * (second + 2.0 * third + fourth)
+}
+
+/// `1/ω_i` of the series at `z` (sorted, `z_d = 0`, d = 3 or 4), for the tests.
+#[cfg(test)]
+pub(super) fn inverse_omega(z: &[f64], i: usize) -> f64 {
+    let k = z.len() - 1;
+    let mut s = [ZERO; 3];
+    for j in 0..k {
+        s[j] = Jet {
+            v: -0.5 / z[j],
+            d: 0.0,
+        };
+    }
+    1.0 / s[i].v - 1.0 + higher_terms(&s[..k], i).v
+}
+
+/// Adds to Newton's step `step` (its first `d − 1` entries; `H Δ = ω² ∘ G` from `z` with
+/// gradient `grad` and Hessian `hess`, d×d row-major) the series' curvature correction `δ`,
+/// `H δ = ω² ∘ N(Δ)` with `N(Δ) = T(z + Δ) − T(z) − T′(z) Δ` for the series' higher terms `T`.
+/// Only for d = 3, 4 and where the series holds at both ends of the step
+/// (`MIN_CONCENTRATION`); otherwise, or if the correction is not finite, `step` is left as it
+/// is. Returns whether it was corrected.
+pub(super) fn correct_step(z: &[f64], grad: &[f64], hess: &[f64], step: &mut [f64]) -> bool {
+    let d = z.len();
+    if !(d == 3 || d == 4) {
+        return false;
+    }
+    let k = d - 1;
+    if !(0..k).all(|i| z[i] <= -MIN_CONCENTRATION && z[i] + step[i] <= -MIN_CONCENTRATION) {
+        return false;
+    }
+    // s_j = −1/(2 z_j) at both ends; at z its derivative along Δ, ds_j/dz_j Δ_j = 2 s_j² Δ_j
+    let (mut s0, mut s1) = ([ZERO; 3], [ZERO; 3]);
+    for j in 0..k {
+        let v = -0.5 / z[j];
+        s0[j] = Jet {
+            v,
+            d: 2.0 * v * v * step[j],
+        };
+        s1[j] = Jet {
+            v: -0.5 / (z[j] + step[j]),
+            d: 0.0,
+        };
+    }
+    let mut jac = [0.0; 9];
+    let mut corr = [0.0; 3];
+    for a in 0..k {
+        for b in 0..k {
+            jac[a * k + b] = hess[a * d + b];
+        }
+        let at_z = higher_terms(&s0[..k], a);
+        let n = higher_terms(&s1[..k], a).v - at_z.v - at_z.d;
+        corr[a] = grad[a] * grad[a] * n;
+    }
+    if !crate::linalg::cholesky_solve(k, &mut jac[..k * k], &mut corr[..k])
+        || !corr[..k].iter().all(|c| c.is_finite())
+    {
+        return false;
+    }
+    for (s, c) in step.iter_mut().zip(&corr[..k]) {
+        *s += c;
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::cholesky_solve;
+    use crate::normalization::{log_normalization_into, Method};
+
+    fn omega(z: &[f64]) -> Vec<f64> {
+        let mut w = vec![0.0; z.len()];
+        log_normalization_into(z, Method::Exact, Some(&mut w), None).unwrap();
+        w
+    }
+
+    /// The series against the exact moments (d = 3, 4): its error in `1/ω_i` falls like the
+    /// first omitted order, `s⁵` relative, as the concentrations grow.
+    #[test]
+    fn series_matches_the_exact_moments_of_concentrated_binghams() {
+        for base in [&[-5.0, -3.0, -1.0, 0.0][..], &[-4.0, -1.5, 0.0][..]] {
+            let mut last = f64::INFINITY;
+            for c in [20.0, 40.0, 80.0, 160.0, 320.0] {
+                let z: Vec<f64> = base.iter().map(|v| v * c).collect();
+                let w = omega(&z);
+                let s_max = 0.5 / c;
+                let err = (0..z.len() - 1)
+                    .map(|i| (inverse_omega(&z, i) * w[i] - 1.0).abs())
+                    .fold(0.0, f64::max);
+                println!(
+                    "z = {z:?}: relative error {err:e}, s_max⁵ = {:e}",
+                    s_max.powi(5)
+                );
+                assert!(err <= 3e4 * s_max.powi(5) + 1e-14, "z = {z:?}: {err:e}");
+                assert!(
+                    err < last || err < 1e-14,
+                    "z = {z:?}: {err:e} after {last:e}"
+                );
+                last = err;
+            }
+        }
+    }
+
+    /// One Newton step from a start 1–3 % off (the spin filter's warm starts): corrected, its
+    /// residual is several times smaller than the plain step's.
+    #[test]
+    fn corrected_step_lands_closer() {
+        for (zs, off) in [
+            ([-60.0, -45.0, -12.0, 0.0], [1.02, 0.985, 1.03]),
+            ([-27.0, -21.0, -9.0, 0.0], [0.99, 1.015, 0.98]),
+            ([-400.0, -90.0, -40.0, 0.0], [1.03, 1.01, 0.97]),
+        ] {
+            let t = omega(&zs);
+            let z0 = [zs[0] * off[0], zs[1] * off[1], zs[2] * off[2], 0.0];
+            let (mut g, mut h) = ([0.0; 4], [0.0; 16]);
+            log_normalization_into(&z0, Method::Exact, Some(&mut g), Some(&mut h)).unwrap();
+            let mut step = [0.0; 4];
+            let mut jac = [0.0; 9];
+            for a in 0..3 {
+                for b in 0..3 {
+                    jac[a * 3 + b] = h[a * 4 + b];
+                }
+                step[a] = g[a] * g[a] * (1.0 / g[a] - 1.0 / t[a]);
+            }
+            assert!(cholesky_solve(3, &mut jac, &mut step[..3]));
+            let resid = |step: &[f64]| {
+                let z: Vec<f64> = (0..4).map(|i| z0[i] + step[i]).collect();
+                let w = omega(&z);
+                (0..3)
+                    .map(|i| (w[i] / t[i] - 1.0).abs())
+                    .fold(0.0, f64::max)
+            };
+            let plain = resid(&step);
+            assert!(correct_step(&z0, &g, &h, &mut step[..3]));
+            let corrected = resid(&step);
+            println!("z = {zs:?}: plain {plain:e}, corrected {corrected:e}");
+            assert!(
+                corrected * 2.0 < plain,
+                "z = {zs:?}: {plain:e} → {corrected:e}"
+            );
+        }
+        // not below MIN_CONCENTRATION, nor for d = 2 or d ≥ 5
+        let mut step = [0.1; 3];
+        assert!(!correct_step(
+            &[-7.0, -20.0, -30.0, 0.0],
+            &[0.0; 4],
+            &[0.0; 16],
+            &mut step
+        ));
+        assert!(!correct_step(
+            &[-70.0, 0.0],
+            &[0.0; 2],
+            &[0.0; 4],
+            &mut step[..1]
+        ));
+        assert_eq!(step, [0.1; 3]);
+    }
+}
