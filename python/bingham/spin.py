@@ -101,7 +101,9 @@ class SpinFilter(_Handle):
         """The log predictive density of observing ``y = o ∘ x`` at the step about to be taken
         (before :meth:`step`; surface measure on S³; the filter is not changed). A bank of spin
         filters sums it over time to compare its hypotheses; of two readings of an ambiguous
-        observation, the one with the larger value is the more probable."""
+        observation, the one with the larger value is the more probable. The first call after
+        a step computes the orientation's prediction and the filter keeps it, so a second call
+        and the next :meth:`step` reuse it."""
         y = _in(y, "y", (4,))
         m_o, z_o = _dist4(m_o, z_o, ("m_o", "z_o"))
         out = np.empty(1)

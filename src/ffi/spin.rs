@@ -169,9 +169,14 @@ pub unsafe extern "C" fn bingham_spin_filter_step(
 /// The natural logarithm of the predictive density of the observation `y = o ∘ x`,
 /// `o ~ Bingham(m_o, z_o)`, for the step about to be taken: `log ∫ f(y | x) (B_v ∘ B_x)(x) dx`,
 /// a density on the unit sphere S^3 with respect to the surface measure (antipodally
-/// symmetric). The filter is not changed. A bank of spin filters sums it over time to compare
-/// its hypotheses; between two interpretations of an ambiguous observation, the one with the
-/// larger value is the more probable.
+/// symmetric). The filter's state is not changed. A bank of spin filters sums it over time to
+/// compare its hypotheses; between two interpretations of an ambiguous observation, the one
+/// with the larger value is the more probable.
+///
+/// Cost: the first call after a step (or after `bingham_spin_filter_set_state()`) computes the
+/// orientation's prediction `B_v ∘ B_x` and the handle keeps it until the state changes, so
+/// further calls and the next `bingham_spin_filter_step()` reuse it (the same results as
+/// without it, bit for bit). Calls on one handle from several threads at once are safe.
 ///
 /// - `y`, `m_o`, `z_o`: as in `bingham_spin_filter_step()` (`y` required here);
 ///   `log_l`: receives the value.

@@ -20,14 +20,16 @@
 //! `docs/design.md` (§ "World-frame steps and the spin filter"), `docs/accuracy.md`
 //! (§ "Glover & Kaelbling reproduced").
 
+use std::sync::OnceLock;
+
 use nalgebra::Const;
 
-use super::core::{composed_moment, log_evidence};
+use super::core::{composed_moment, log_joint_normalizer};
 use super::noise::{NoiseCache, Role};
 use super::world::{conjugation, world_likelihood_m};
 use super::{Mat, Vect, MAX_CONCENTRATION};
 use crate::canonical::{params_row_major, unit};
-use crate::distribution::{bayes_product, omega, Bingham};
+use crate::distribution::{bayes_product, log_f_omega, omega, Bingham};
 use crate::error::{Error, Result};
 use crate::linalg::{congruence, write_row_major};
 use crate::mle::{fit_second_moment_nearest, Derivs};
@@ -101,6 +103,22 @@ struct Warm {
     spin: Starts,
 }
 
+/// The orientation's prediction `B_v ∘ B_x` for the next step, which depends on the state
+/// only: the moment of `x` (the spin evidence needs it too), the moment-matched parameters,
+/// the solver's solution (the next warm start) and, once [`SpinFilter::log_likelihood`] has
+/// needed it, its `log F`. Computed by whichever of `step` and `log_likelihood` comes first
+/// and shared by the others until the state changes: a caller that weighs two interpretations
+/// of an observation and then steps pays for one prediction, not three. The same bits either
+/// way (the solver starts from the same warm starts).
+#[derive(Debug, Clone)]
+struct Prediction {
+    ax: Mat<4>,
+    m: Mat<4>,
+    z: Vect<4>,
+    sol: Derivs<Const<4>>,
+    log_f: OnceLock<f64>,
+}
+
 /// The second-order quaternion Bingham filter (orientation and spin, d = 4, quaternions scalar
 /// first), see the module documentation for the model.
 ///
@@ -118,6 +136,8 @@ pub struct SpinFilter {
     /// saves one evaluation of the normalization's derivatives per step.
     v_moment: Option<Mat<4>>,
     warm: Warm,
+    /// The prediction of the current state, once computed (see [`Prediction`]).
+    predicted: OnceLock<Prediction>,
     process: NoiseCache<4>,
     observation: NoiseCache<4>,
 }
@@ -142,6 +162,7 @@ impl SpinFilter {
             v: Marginal::from_slices("m_v", m_v, "z_v", z_v)?,
             v_moment: None,
             warm: Warm::default(),
+            predicted: OnceLock::new(),
             process: NoiseCache::empty(),
             observation: NoiseCache::empty(),
         })
@@ -155,6 +176,7 @@ impl SpinFilter {
         self.v = v;
         self.v_moment = None;
         self.warm = Warm::default();
+        self.predicted = OnceLock::new();
         Ok(())
     }
 
@@ -254,12 +276,13 @@ impl SpinFilter {
             None => None,
         };
 
-        let ax = composed_moment(&self.x.m, &self.x.z)?;
         let av = self.spin_moment()?;
 
         // Orientation: x_n = v_{n−1} ∘ x_{n−1}, then the observation.
-        let (mxp, zxp, warm_x) =
-            fit_second_moment_nearest(&compose_moments(&av, &ax), self.warm.orientation.iter())?;
+        let (ax, mxp, zxp, warm_x) = {
+            let p = self.prediction()?;
+            (p.ax, p.m, p.z, p.sol.clone())
+        };
         let x = match &obs {
             Some(o) => {
                 let (m, z) = bayes_product(&mxp, &zxp, &o.precision)?;
@@ -297,12 +320,36 @@ impl SpinFilter {
         self.x = x;
         self.v = Marginal { m: mvn, z: zvn };
         self.v_moment = v_moment;
+        self.predicted = OnceLock::new();
         self.warm.orientation.push(warm_x);
         if let Some(g) = warm_g {
             self.warm.evidence.push(g);
         }
         self.warm.spin.push(warm_v);
         Ok(())
+    }
+
+    /// The orientation's prediction of the current state (see [`Prediction`]), computed now if
+    /// no call has since the state last changed.
+    fn prediction(&self) -> Result<&Prediction> {
+        if let Some(p) = self.predicted.get() {
+            return Ok(p);
+        }
+        let ax = composed_moment(&self.x.m, &self.x.z)?;
+        let av = self.spin_moment()?;
+        let (m, z, sol) =
+            fit_second_moment_nearest(&compose_moments(&av, &ax), self.warm.orientation.iter())?;
+        // Another thread may have set it meanwhile: the same value (same state, same starts).
+        let _ = self.predicted.set(Prediction {
+            ax,
+            m,
+            z,
+            sol,
+            log_f: OnceLock::new(),
+        });
+        self.predicted
+            .get()
+            .ok_or_else(|| Error::Numerical("spin filter: the prediction was not kept".into()))
     }
 
     /// The spin marginal's second moment (see [`SpinFilter::v_moment`]).
@@ -317,7 +364,9 @@ impl SpinFilter {
     /// `o ~ Bingham(m_o, z_o)`, before the step that would take it: `log ∫ f(y | x) (B_v ∘
     /// B_x)(x) dx`, a density on the unit sphere S³ (surface measure, antipodally symmetric),
     /// the quantity a bank of filters sums over time, and what picks between two
-    /// interpretations of an ambiguous observation. The filter is not changed.
+    /// interpretations of an ambiguous observation. The filter's state is not changed; the
+    /// orientation's prediction this computes is kept until the state changes, so further
+    /// calls and the next [`SpinFilter::step`] reuse it (the same bits as without it).
     ///
     /// Errors: as for [`SpinFilter::step`]'s observation.
     pub fn log_likelihood(&self, y: &[f64], m_o: &[f64], z_o: &[f64]) -> Result<f64> {
@@ -326,12 +375,17 @@ impl SpinFilter {
             .observation
             .lookup_or_build(Role::Observation, m_o, z_o)?;
         let log_f_o = o.log_f()?;
-        let ax = composed_moment(&self.x.m, &self.x.z)?;
-        let av = self.spin_moment()?;
-        let (mxp, zxp, _) =
-            fit_second_moment_nearest(&compose_moments(&av, &ax), self.warm.orientation.iter())?;
+        let pred = self.prediction()?;
+        let log_f_x = match pred.log_f.get() {
+            Some(v) => *v,
+            None => {
+                let v = log_f_omega(&pred.z)?.0;
+                let _ = pred.log_f.set(v);
+                v
+            }
+        };
         let p = congruence(&world_likelihood_m(&y, &o.m), &o.z);
-        let value = log_evidence(&mxp, &zxp, &p)? - log_f_o;
+        let value = log_joint_normalizer(&pred.m, &pred.z, &p)? - log_f_x - log_f_o;
         if !value.is_finite() {
             return Err(Error::Numerical(format!(
                 "log-likelihood is not finite ({value})"
@@ -398,5 +452,78 @@ mod tests {
             }
         }
         assert!(kept >= 110, "kept {kept} of 120");
+    }
+
+    /// Weighing observations with `log_likelihood` before a step changes nothing: the shared
+    /// prediction gives the same states bit for bit as steps alone, the same log-likelihoods
+    /// on every call, and those are the predictive density computed from scratch (the
+    /// orientation prediction fitted anew, `log_evidence` minus the noise's `log F`) to
+    /// rounding.
+    #[test]
+    fn the_shared_prediction_changes_no_bit() {
+        use crate::filter::core::log_evidence;
+        let id = [
+            1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+        ];
+        let (z_w, z_o) = ([0.0, -400.0, -400.0, -400.0], [0.0, -40.0, -40.0, -10.0]);
+        let spin = q4::from_rotation_vector(&[0.9, 0.3, -0.4]);
+        let new = || SpinFilter::new(&id, &[0.0; 4], &id, &[0.0, -3.0, -3.0, -3.0]).unwrap();
+        let (mut weighed, mut plain) = (new(), new());
+        let mut x = [0.6, -0.2, 0.5, 0.59].map(|v: f64| v / 0.9981f64.sqrt());
+        let bits = |m: &[f64]| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        for k in 0..60 {
+            x = q4::mul(&spin, &x);
+            let o = q4::from_rotation_vector(&[0.02 * (k % 3) as f64, -0.03, 0.01]);
+            let y = q4::mul(&o, &x);
+            let y_flip = q4::mul(&y, &[0.0, 0.0, 0.0, 1.0]);
+            let obs = (k % 5 != 2).then_some(&y[..]);
+            let a = weighed.log_likelihood(&y, &id, &z_o).unwrap();
+            let b = weighed.log_likelihood(&y_flip, &id, &z_o).unwrap();
+            assert_eq!(
+                a.to_bits(),
+                weighed.log_likelihood(&y, &id, &z_o).unwrap().to_bits()
+            );
+            // from scratch, as before the prediction was shared
+            let ax = composed_moment(&weighed.x.m, &weighed.x.z).unwrap();
+            let av = weighed.spin_moment().unwrap();
+            let (mxp, zxp, _) = fit_second_moment_nearest(
+                &compose_moments(&av, &ax),
+                weighed.warm.orientation.iter(),
+            )
+            .unwrap();
+            let yv = Vect::<4>::from_column_slice(&y);
+            let o = weighed
+                .observation
+                .lookup_or_build(Role::Observation, &id, &z_o)
+                .unwrap();
+            let p = congruence(&world_likelihood_m(&yv, &o.m), &o.z);
+            let scratch = log_evidence(&mxp, &zxp, &p).unwrap() - o.log_f().unwrap();
+            // (y is normalized on the way in; the test's is unit to rounding)
+            assert!(
+                (a - scratch).abs() <= 1e-12 * (1.0 + a.abs()),
+                "step {k}: {a} vs {scratch}"
+            );
+            assert!(a.is_finite() && b.is_finite());
+            weighed.step(None, &id, &z_w, obs, &id, &z_o).unwrap();
+            plain.step(None, &id, &z_w, obs, &id, &z_o).unwrap();
+            let (mut s1, mut s2) = ([0.0; 40], [0.0; 40]);
+            {
+                let (a1, b1) = s1.split_at_mut(20);
+                let (mx, zx) = a1.split_at_mut(16);
+                let (mv, zv) = b1.split_at_mut(16);
+                weighed
+                    .state_into(mx, &mut zx[..4], mv, &mut zv[..4])
+                    .unwrap();
+            }
+            {
+                let (a2, b2) = s2.split_at_mut(20);
+                let (mx, zx) = a2.split_at_mut(16);
+                let (mv, zv) = b2.split_at_mut(16);
+                plain
+                    .state_into(mx, &mut zx[..4], mv, &mut zv[..4])
+                    .unwrap();
+            }
+            assert_eq!(bits(&s1), bits(&s2), "step {k}");
+        }
     }
 }
