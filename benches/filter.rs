@@ -193,10 +193,10 @@ fn bench_spin(c: &mut Criterion) {
     });
     // The first log_likelihood after a step computes the orientation's prediction (the
     // filter keeps it until the state changes): measured on a fresh copy of the state each time
-    // (the copy is setup, not timed). A second one (another interpretation of the same
-    // observation) and the step after them reuse it.
+    // (making and dropping the copy are not timed). A second one (another interpretation of the
+    // same observation) and the step after them reuse it.
     g.bench_function("spin filter log_likelihood", |b| {
-        b.iter_batched(
+        b.iter_batched_ref(
             || second.clone(),
             |f| f.log_likelihood(black_box(&ys[7]), &id, &z_o).unwrap(),
             BatchSize::SmallInput,
