@@ -503,7 +503,11 @@ typedef struct bingham_ahrs_params {
      */
     double bias_max;
     /**
-     * Time (s) the sensor must be still before the bias is taken from the gyroscope.
+     * Time (s) the sensor must be still before the bias is taken from the gyroscope. The
+     * gyroscope's samples of a still phase then measure the bias (their mean) and the
+     * gyroscope's noise (their spread), weighed against the bias's uncertainty in a Kalman
+     * step; the phase's first half second and its last (the motion's edges, which the rest
+     * test sees late) are left out.
      */
     double rest_time;
     /**
@@ -514,10 +518,6 @@ typedef struct bingham_ahrs_params {
      * Rest threshold on the accelerometer's deviation from its low-pass value (m/s²).
      */
     double rest_acc;
-    /**
-     * Time constant (s) of the bias estimate while at rest.
-     */
-    double rest_bias_time;
     /**
      * Angular standard deviation (rad) of the initial tilt and heading.
      */

@@ -339,9 +339,18 @@ fn estimates_the_gyro_bias() {
     }
     let b = a.gyro_bias();
     let err: Vec<f64> = (0..3).map(|i| (b[i] - s.bias[i]).to_degrees()).collect();
-    println!("after the 10 s rest: error {err:.4?}°/s");
-    for e in &err {
-        assert!(e.abs() < 0.25 * BIAS_DEG, "bias error at rest {e}°/s");
+    let cov = a.gyro_bias_covariance();
+    let std: Vec<f64> = (0..3).map(|i| cov[4 * i].sqrt().to_degrees()).collect();
+    println!("after the 10 s rest: error {err:.4?}°/s, reported std {std:.4?}°/s");
+    // The rest's samples (0.3°/s noise each, about 850 of them used) measure the bias to
+    // 0.01°/s (the bias's random walk is held over a rest): the reported standard deviation,
+    // which covers the error (measured 2026-11-27: errors 2.2, 0.4 and 1.5 of it).
+    for (e, sd) in err.iter().zip(&std) {
+        assert!(*sd < 0.05, "reported std at rest {sd}°/s");
+        assert!(
+            e.abs() < 3.0 * sd,
+            "bias error at rest {e}°/s, reported std {sd}°/s"
+        );
     }
 }
 

@@ -3,7 +3,7 @@
 samples with known truth (``imu_sim.py``), one scenario per effect.
 
     usage: python3 examples/python/ahrs_suite.py [--only NAME,...] [--quick] [--json OUT.json]
-                                                 [--seed N] [--list]
+                                                 [--seed N] [--seeds K] [--list]
 
 Filters (each with its defaults, causal, on the same samples):
 
@@ -42,6 +42,10 @@ gyro noise 0.005 rad/s, accelerometer 0.05 m/s², magnetometer 0.5 µT per sampl
 * ``bursts``: linear-acceleration bursts (0.3 per second, 2–8 m/s² peaks, 0.3–1.5 s each).
 
 ``--quick`` runs every scenario for 25 s (events at 12.5 s instead of 30 s) as a smoke test.
+``--seeds K`` (K > 1) also runs the nine bias scenarios with the seeds N+1 … N+K−1 and prints, per
+scenario, each filter's total error averaged over the K seeds and on how many seeds Bingham's is
+at or below VQF's: one seed is one noise realization and one motion, and the filters' ranking
+on the bias scenarios turns on a few hundredths of a degree.
 The suite is a measuring stick: the scenario parameters are physical choices, not tuned to any
 filter. Needs the ``bingham`` package (``pip install ./python``, or ``BINGHAM_LIB`` and
 ``PYTHONPATH=python``) and, for the peers, ``pip install vqf ahrs``.
@@ -293,6 +297,38 @@ def print_table(results, filters):
     print()
 
 
+def over_seeds(todo, filters, seed, k, quick, first):
+    """The bias scenarios of ``todo`` with the seeds ``seed`` … ``seed + k − 1`` (``first`` holds
+    the runs with ``seed``): per scenario and filter the total error of every seed, their mean,
+    and how many seeds have Bingham's at or below VQF's; printed as a table."""
+    out = {}
+    for name, desc, overrides, settle in todo:
+        if group_of(name) != "bias":
+            continue
+        per = {f: [first[name]["filters"][f]["total"]] for f in filters
+               if f in first[name]["filters"]}
+        for s in range(seed + 1, seed + k):
+            res, _ = evaluate(name, desc, overrides, settle, filters, s, quick)
+            for f in per:
+                per[f].append(res["filters"][f]["total"] if f in res["filters"] else math.nan)
+        row = {f: {"totals": v, "mean": float(np.mean(v))} for f, v in per.items()}
+        if "bingham" in per and "vqf" in per:
+            row["bingham_at_or_below_vqf"] = int(sum(
+                b <= v for b, v in zip(per["bingham"], per["vqf"])))
+        out[name] = row
+    if out:
+        print(f"bias scenarios over {k} seeds ({seed}…{seed + k - 1}): total RMSE (deg), mean "
+              "over the seeds" + ("; seeds with Bingham <= VQF" if "vqf" in filters else ""))
+        print(f"{'scenario':<18} | " + " ".join(f"{SHORT[f]:>6}" for f in filters))
+        for name, row in out.items():
+            line = f"{name:<18} | " + " ".join(fmt(row.get(f, {}).get("mean")) for f in filters)
+            if "bingham_at_or_below_vqf" in row:
+                line += f" | {row['bingham_at_or_below_vqf']}/{k}"
+            print(line)
+        print()
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -301,6 +337,8 @@ def main(argv=None):
                     help=f"{QUICK_DURATION:g}-s versions of the scenarios (smoke test)")
     ap.add_argument("--json", metavar="OUT.json", help="write all numbers as JSON")
     ap.add_argument("--seed", type=int, default=SEED, help=f"simulation seed (default {SEED})")
+    ap.add_argument("--seeds", type=int, default=1, metavar="K",
+                    help="also run the bias scenarios with K-1 more seeds (default 1: none)")
     ap.add_argument("--list", action="store_true", help="list the scenarios and exit")
     args = ap.parse_args(argv)
 
@@ -358,6 +396,8 @@ def main(argv=None):
                        segments=int(sum(len(e) for e in seg_e)))
         print(f"Bingham, {SEGMENT:g}-s segment RMS error vs RMS spread: Spearman {pooled:+.2f} "
               f"pooled over {summary['segments']} segments; median per scenario {med:+.2f}")
+    if args.seeds > 1:
+        summary["seeds"] = over_seeds(todo, filters, args.seed, args.seeds, args.quick, results)
     times = {}
     for f in filters:
         n = sum(r["samples"] for r in results.values() if f in r["filters"])

@@ -94,7 +94,6 @@ class AhrsParams(ctypes.Structure):
         ("rest_time", ctypes.c_double),
         ("rest_gyro", ctypes.c_double),
         ("rest_acc", ctypes.c_double),
-        ("rest_bias_time", ctypes.c_double),
         ("init_std", ctypes.c_double),
         ("mag_latency", ctypes.c_double),
         ("acc_latency", ctypes.c_double),

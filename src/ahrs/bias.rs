@@ -95,15 +95,18 @@ impl BiasState {
         self.c = sigma_post * k;
     }
 
-    /// A direct measurement `y` of the bias at rest, blended with gain `k` (0..1) into the
-    /// estimate (a fixed-gain Kalman step): the covariance shrinks to `(1−k)² P + k² r`, `r` the
-    /// measurement's variance, the coupling by `1 − k`.
-    pub(super) fn rest(&mut self, y: &[f64; 3], k: f64, r: f64) {
-        for (b, y) in self.b.iter_mut().zip(y) {
-            *b += k * (y - *b);
-        }
-        self.p = self.p * ((1.0 - k) * (1.0 - k)) + Matrix3::identity() * (k * k * r);
-        self.c *= 1.0 - k;
+    /// A direct measurement `y` of the bias at rest (rad/s) with variance `r` ((rad/s)² per
+    /// axis): the Kalman update `K = P (P + r I)⁻¹`, `b̂ ← b̂ + K (y − b̂)`, `P ← (I − K) P`,
+    /// `C ← C (I − K)ᵀ` (the bias error becomes `(I − K) e − K v`).
+    pub(super) fn rest(&mut self, y: &Vector3<f64>, r: f64) {
+        let Some(s_inv) = (self.p + Matrix3::identity() * r).try_inverse() else {
+            return;
+        };
+        let k = self.p * s_inv;
+        self.b += k * (y - self.b);
+        let ik = Matrix3::identity() - k;
+        self.p = psd(&(ik * self.p));
+        self.c *= ik.transpose();
     }
 
     /// The estimate clipped to `±max` per axis.

@@ -31,7 +31,6 @@ pub(super) struct Coeffs {
     pub(super) rest_filter: f64,
     /// The coefficient of the band limit of the rest test's samples.
     pub(super) rest_noise: f64,
-    pub(super) rest_bias: f64,
     pub(super) mag_ref: f64,
     pub(super) candidate: f64,
     /// The low-pass coefficient of the norm and dip the disturbance test sees.
@@ -64,7 +63,6 @@ impl Coeffs {
         Coeffs {
             rest_filter: lp_coeff(dt, REST_FILTER_TIME),
             rest_noise: lp_coeff(dt, REST_NOISE_TIME),
-            rest_bias: lp_coeff(dt, p.rest_bias_time),
             mag_ref: lp_coeff(dt, p.mag_ref_time),
             candidate: lp_coeff(dt, CANDIDATE_TIME),
             mag_test: lp_coeff(dt, super::magnetic::TEST_TIME),

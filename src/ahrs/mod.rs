@@ -12,8 +12,9 @@
 //! 1. **Rest and the bias at rest.** The gyroscope and accelerometer are low-pass filtered;
 //!    while both (band-limited to 20 ms, so that the test sees the same noise at every sample
 //!    rate) stay within thresholds of their low-pass values for
-//!    [`AhrsParams::rest_time`], the low-passed rate is a direct measurement of the bias
-//!    (a fixed-gain Kalman step, time constant [`AhrsParams::rest_bias_time`]).
+//!    [`AhrsParams::rest_time`], the raw gyroscope samples of the still phase measure the
+//!    bias, their spread the gyroscope's noise: a Kalman step of the bias with their mean
+//!    (module `rest`: in half-second blocks, the edges of the phase left out).
 //! 2. **Gyroscope.** The state is turned exactly by the body-frame increment of the
 //!    bias-corrected rate, `q ← q ⊗ Δq`; the process noise of the sample — `gyro_noise²·dt`,
 //!    `(gyro_scale_noise·|ω|)²·dt`, and what the bias's uncertainty adds through its
@@ -69,6 +70,7 @@ mod latency;
 mod lowpass;
 mod magnetic;
 mod params;
+mod rest;
 mod vec3;
 
 use bias::{evidence_precision, noise_moment, pinv, precision, BiasState};
@@ -76,11 +78,12 @@ use health::HealthState;
 pub use health::{AhrsHealth, HEALTH_THRESHOLD, HEALTH_TIME};
 use latency::{turn_forward, LatencyEstimator};
 pub use lowpass::CORRECTION_PERIOD;
-use lowpass::{Coeffs, InertialLowPass, REST_FILTER_TIME};
+use lowpass::{Coeffs, InertialLowPass};
 use magnetic::{heading_exponent, Magnetic};
 pub use params::{
     AhrsParams, LATENCY_ESTIMATE, MAX_LATENCY, MAX_SAMPLE_TIME, MIN_SAMPLE_TIME, MIN_STEP_NOISE,
 };
+use rest::RestWindow;
 use vec3::{cross3, norm3, scale3};
 
 /// The largest rotation (rad) one gyroscope sample may turn (`|gyr|·sample_time`): a million
@@ -107,6 +110,11 @@ struct SampleState {
     gyr_fast: [f64; 3],
     acc_fast: [f64; 3],
     rest_timer: f64,
+    /// The raw gyroscope samples of the current still phase (module `rest`).
+    rest: RestWindow,
+    /// Seconds of the current rest (past `rest_time`) over which the bias's random walk is
+    /// held.
+    rest_held: f64,
     acc_filter: InertialLowPass,
     mag: Magnetic,
     /// Samples since the last correction.
@@ -148,6 +156,8 @@ impl Ahrs {
                 gyr_fast: [0.0; 3],
                 acc_fast: [0.0; 3],
                 rest_timer: 0.0,
+                rest: RestWindow::default(),
+                rest_held: 0.0,
                 acc_filter: InertialLowPass::new(coeffs.acc, coeffs.acc_warmup, &[0.0; 3]),
                 mag: Magnetic::new(),
                 since: 0,
@@ -452,6 +462,8 @@ impl Ahrs {
         self.s.gyr_fast = *gyr;
         self.s.acc_fast = *acc_raw;
         self.s.rest_timer = 0.0;
+        self.s.rest = RestWindow::default();
+        self.s.rest_held = 0.0;
         self.s.acc_filter = InertialLowPass::new(c.acc, c.acc_warmup, &acc);
         self.s.mag = mag_state;
         self.s.since = 0;
@@ -568,11 +580,12 @@ fn step(
     let dg = norm3(&[f[0] - g[0], f[1] - g[1], f[2] - g[2]]);
     let still = dg < p.rest_gyro && da < p.rest_acc && norm3(g) < 2.0 * p.bias_max;
     s.rest_timer = if still { s.rest_timer + dt } else { 0.0 };
+    s.rest.push(still, gyr, dt);
     if s.rest_timer >= p.rest_time {
-        // the variance of a first-order low-pass of white noise of density gyro_noise
-        let r = p.gyro_noise * p.gyro_noise / (2.0 * REST_FILTER_TIME);
-        s.bias.rest(&s.gyr_lp, c.rest_bias, r);
-        s.bias.clip(p.bias_max);
+        if let Some((mean, var)) = s.rest.take(p.gyro_noise * p.gyro_noise / dt) {
+            s.bias.rest(&Vector3::from(mean), var);
+            s.bias.clip(p.bias_max);
+        }
     }
 
     // 2. Gyroscope: the exact turn, the process noise accumulated.
@@ -588,11 +601,21 @@ fn step(
     let scale = p.gyro_scale_noise * rate;
     // at most 1 rad² per sample: a wider noise is uniform for all purposes
     let q = ((p.gyro_noise * p.gyro_noise + scale * scale) * dt).min(1.0);
-    let drift = if p.bias_time > 0.0 {
+    let mut drift = if p.bias_time > 0.0 {
         p.bias_std * p.bias_std / p.bias_time * dt
     } else {
         0.0
     };
+    // Over a rest the bias is one constant, which the rest's samples measure (module `rest`):
+    // its random walk is held, and added when the rest ends as the variance of a random walk's
+    // end about its mean over the phase (a third of the walk's variance over the phase).
+    if s.rest_timer >= p.rest_time {
+        s.rest_held += dt;
+        drift = 0.0;
+    } else if s.rest_held > 0.0 {
+        drift += drift / dt * s.rest_held / 3.0;
+        s.rest_held = 0.0;
+    }
     let r = q4::to_matrix(&dq);
     s.bias
         .predict(&Matrix3::from_fn(|i, j| r[i][j]), dt, q, drift);
@@ -695,8 +718,10 @@ fn correct(p: &AhrsParams, c: &Coeffs, core: &mut Core<4>, s: &mut SampleState) 
         let up_post = q4::rotate_inverse(&q_post, &UP);
         Vector3::from(cross3(&up_post, &up_prior))
     };
-    s.bias
-        .correct(&lam_prior, &mu, &sigma_post, p.bias_time > 0.0);
+    // At rest the gyroscope measures the bias directly (module `rest`), far better than the
+    // corrections can: they do not teach it then.
+    let learn = p.bias_time > 0.0 && s.rest_timer < p.rest_time;
+    s.bias.correct(&lam_prior, &mu, &sigma_post, learn);
     s.bias.clip(p.bias_max);
 
     // The heading correction turns the field's average with it.

@@ -78,14 +78,16 @@ pub struct AhrsParams {
     pub bias_time: f64,
     /// Largest gyroscope bias (rad/s) per axis the estimate may reach.
     pub bias_max: f64,
-    /// Time (s) the sensor must be still before the bias is taken from the gyroscope.
+    /// Time (s) the sensor must be still before the bias is taken from the gyroscope. The
+    /// gyroscope's samples of a still phase then measure the bias (their mean) and the
+    /// gyroscope's noise (their spread), weighed against the bias's uncertainty in a Kalman
+    /// step; the phase's first half second and its last (the motion's edges, which the rest
+    /// test sees late) are left out.
     pub rest_time: f64,
     /// Rest threshold on the gyroscope's deviation from its low-pass value (rad/s).
     pub rest_gyro: f64,
     /// Rest threshold on the accelerometer's deviation from its low-pass value (m/s²).
     pub rest_acc: f64,
-    /// Time constant (s) of the bias estimate while at rest.
-    pub rest_bias_time: f64,
     /// Angular standard deviation (rad) of the initial tilt and heading.
     pub init_std: f64,
     /// Latency (s, 0 to 0.5 = `BINGHAM_AHRS_MAX_LATENCY`) of the magnetometer behind the
@@ -138,7 +140,6 @@ impl AhrsParams {
             rest_time: 1.5,
             rest_gyro: 2f64.to_radians(),
             rest_acc: 0.5,
-            rest_bias_time: 2.0,
             init_std: 0.1,
             mag_latency: LATENCY_ESTIMATE,
             acc_latency: 0.0,
@@ -204,7 +205,6 @@ impl AhrsParams {
             ("rest_time", self.rest_time),
             ("rest_gyro", self.rest_gyro),
             ("rest_acc", self.rest_acc),
-            ("rest_bias_time", self.rest_bias_time),
             ("init_std", self.init_std),
             ("bias_std", self.bias_std),
         ];

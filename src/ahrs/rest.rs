@@ -1,0 +1,169 @@
+//! The gyroscope bias at rest: the raw gyroscope samples of a still phase, in blocks.
+//!
+//! At rest the gyroscope shows its bias plus its white noise, and the samples also give the
+//! noise's variance. The mean of `n` samples is a measurement of the bias with variance
+//! `var/n`, the bias's Kalman filter (module `bias`) weighs it against what it knows. The edges
+//! of a still phase are not trusted: the rest test notices the start of a motion only after
+//! the motion has begun (its samples are band-limited and compared with a 0.5-s average),
+//! and the end of a motion decays into the phase. So the samples are collected in blocks of
+//! [`BLOCK_TIME`]; the first block of a phase is dropped, and a block is used only once the
+//! next block has been still too. The blocks so confirmed are held until the phase has been
+//! still for `rest_time`, then applied as one measurement, and each further confirmed block
+//! as another. Over a rest the bias is one constant: the AHRS holds the bias's random walk
+//! while at rest and adds, when the rest ends, the variance of a random walk's end about its
+//! mean over the phase (docs/accuracy.md, "The bias at rest").
+
+/// Length (s) of a block of the still phase: the time scale of the rest test's average.
+pub(super) const BLOCK_TIME: f64 = 0.5;
+
+/// The smallest variance per axis ((rad/s)²) taken for the gyroscope's noise at rest: a
+/// noiseless (simulated or quantized) signal is then known to 1e-6 rad/s per sample.
+const MIN_VAR: f64 = 1e-12;
+
+/// The fewest samples from which their variance is taken as the gyroscope's noise at rest.
+const MIN_SAMPLES: f64 = 10.0;
+
+/// A sum of gyroscope samples, of their squared norms, and their number.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct Sum {
+    x: [f64; 3],
+    sq: f64,
+    n: f64,
+}
+
+impl Sum {
+    fn push(&mut self, gyr: &[f64; 3]) {
+        for (a, b) in self.x.iter_mut().zip(gyr) {
+            *a += b;
+        }
+        self.sq += gyr.iter().map(|v| v * v).sum::<f64>();
+        self.n += 1.0;
+    }
+
+    fn add(&mut self, other: &Sum) {
+        for (a, b) in self.x.iter_mut().zip(&other.x) {
+            *a += b;
+        }
+        self.sq += other.sq;
+        self.n += other.n;
+    }
+
+    fn mean(&self) -> [f64; 3] {
+        self.x.map(|v| v / self.n)
+    }
+}
+
+/// The samples of the current still phase.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(super) struct RestWindow {
+    /// Confirmed blocks not yet applied, the last complete block, the block being filled.
+    held: Sum,
+    pending: Sum,
+    current: Sum,
+    /// Every confirmed block of the phase (for the noise's variance).
+    confirmed: Sum,
+    /// Complete blocks so far in the phase.
+    blocks: u32,
+}
+
+impl RestWindow {
+    /// One sample: `still` whether the rest test passed, `gyr` the raw sample, `dt` the sample
+    /// time (s). The phase ends (everything dropped) when the test fails.
+    pub(super) fn push(&mut self, still: bool, gyr: &[f64; 3], dt: f64) {
+        if !still {
+            *self = RestWindow::default();
+            return;
+        }
+        self.current.push(gyr);
+        if self.current.n * dt >= BLOCK_TIME {
+            // the previous block is confirmed by this one (the first block of the phase, which
+            // nothing precedes, is dropped)
+            if self.blocks >= 2 {
+                let p = self.pending;
+                self.held.add(&p);
+                self.confirmed.add(&p);
+            }
+            self.pending = self.current;
+            self.current = Sum::default();
+            self.blocks += 1;
+        }
+    }
+
+    /// The bias measurement the phase holds, taken out (`(mean, variance per axis)`, rad/s and
+    /// (rad/s)²), or `None`. `fallback_var` is the variance per sample used when the phase has
+    /// fewer than `MIN_SAMPLES` samples.
+    pub(super) fn take(&mut self, fallback_var: f64) -> Option<([f64; 3], f64)> {
+        if self.held.n == 0.0 {
+            return None;
+        }
+        let h = std::mem::take(&mut self.held);
+        let c = &self.confirmed;
+        let var = if c.n >= MIN_SAMPLES {
+            // the samples' variance about their mean (the bias is constant over a rest)
+            let m2: f64 = c.mean().iter().map(|v| v * v).sum();
+            ((c.sq / c.n - m2) / 3.0).max(MIN_VAR)
+        } else {
+            fallback_var
+        };
+        Some((h.mean(), var / h.n))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A still phase whose first and last half seconds hold motion: neither reaches the
+    /// measurements; the mean and the variance are those of the samples in between.
+    #[test]
+    fn the_edges_of_a_still_phase_are_left_out() {
+        let dt = 0.01;
+        let (b, sd) = ([0.01, -0.02, 0.005], 0.003);
+        let mut w = RestWindow::default();
+        let mut taken = Vec::new();
+        let mut feed = |w: &mut RestWindow, still: bool, g: [f64; 3]| {
+            w.push(still, &g, dt);
+            if let Some(m) = w.take(1.0) {
+                taken.push(m);
+            }
+        };
+        // the end of a motion (first block), 3 s of rest (noise ±sd alternating), the start of
+        // the next motion still passing the test for 0.3 s, then failing it
+        for _ in 0..50 {
+            feed(&mut w, true, [0.3, 0.2, -0.1]);
+        }
+        for k in 0..300 {
+            let s = if k % 2 == 0 { sd } else { -sd };
+            feed(&mut w, true, [b[0] + s, b[1] + s, b[2] + s]);
+        }
+        for k in 0..30 {
+            feed(&mut w, true, [0.01 * f64::from(k), 0.0, 0.0]);
+        }
+        feed(&mut w, false, [1.0, 0.0, 0.0]);
+        // blocks 2..6 (the rest's first 2.5 s) are confirmed; the last rest block and the
+        // motion's start wait for a confirmation that never comes
+        assert_eq!(taken.len(), 5);
+        for (m, var) in &taken {
+            for i in 0..3 {
+                assert!((m[i] - b[i]).abs() < 1e-12, "{m:?}");
+            }
+            assert!(
+                (var * 50.0 - sd * sd).abs() < 1e-12 * sd * sd * 50.0 + 1e-15,
+                "{var}"
+            );
+        }
+        // the phase ended: nothing left
+        assert!(w.take(1.0).is_none());
+    }
+
+    #[test]
+    fn a_short_phase_uses_the_fallback_variance() {
+        // 1 Hz samples: blocks of one sample, too few for a variance
+        let mut w = RestWindow::default();
+        for _ in 0..3 {
+            w.push(true, &[0.01, 0.0, 0.0], 1.0);
+        }
+        let (m, var) = w.take(0.04).unwrap();
+        assert!((m[0] - 0.01).abs() < 1e-15 && var == 0.04);
+    }
+}
