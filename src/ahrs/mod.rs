@@ -300,7 +300,8 @@ impl Ahrs {
 
     /// The covariance of the gyroscope bias estimate ((rad/s)², 3×3 row-major, sensor frame):
     /// starts at `bias_std²·I`, shrinks as the corrections (and rests) teach the bias, grows
-    /// by `bias_std²/bias_time` per second.
+    /// by `bias_std²/bias_time` per second (over a rest the growth is held, and a third of it is
+    /// added when the rest ends).
     pub fn gyro_bias_covariance(&self) -> [f64; 9] {
         let p = &self.s.bias.p;
         let mut out = [0.0; 9];

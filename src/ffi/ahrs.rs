@@ -513,7 +513,9 @@ pub unsafe extern "C" fn bingham_ahrs_gyro_bias(
 ///
 /// It is `bias_std²·I` (see `bingham_ahrs_params`) on creation and until the first sample has
 /// been processed; then it shrinks as the corrections during motion and the rests teach the
-/// bias, and grows by `bias_std²/bias_time` per second (not at all with `bias_time = 0`).
+/// bias, and grows by `bias_std²/bias_time` per second (not at all with `bias_time = 0`); over
+/// a rest the growth is held, and a third of it is added when the rest ends (the bias is taken
+/// as one constant over a rest, which the rest's samples measure).
 ///
 /// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `cov`). On error nothing is written.
 ///
