@@ -52,7 +52,7 @@
 /**
  * Minor version of the header.
  */
-#define BINGHAM_VERSION_MINOR 2
+#define BINGHAM_VERSION_MINOR 3
 
 /**
  * Patch version of the header.

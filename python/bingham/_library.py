@@ -178,11 +178,37 @@ def _load() -> Tuple[ctypes.CDLL, str]:
                 continue
             fn.restype = restype
             fn.argtypes = argtypes
+        found = cdll.bingham_version().decode() if hasattr(cdll, "bingham_version") else "unknown"
+        wanted = _package_version()
+        if not compatible(found, wanted):
+            errors.append(
+                f"{path}: library version {found}, but this package is {wanted}: the structs "
+                "passed by value (e.g. the AHRS parameters) differ between these versions; "
+                "use the library built with the package"
+            )
+            continue
         return cdll, (os.path.abspath(path) if os.sep in path else path)
     raise OSError(
         "cannot load libbingham (install the package with `pip install ./python` from the "
         "repository, or set BINGHAM_LIB to a libbingham.so): " + "; ".join(errors)
     )
+
+
+def compatible(library: str, package: str) -> bool:
+    """Whether a library of version ``library`` can serve a package of version ``package``:
+    the same major version and, before 1.0, the same minor version (a 0.x release may change
+    the layout of the structs the API passes, as 0.3 did for ``bingham_ahrs_params``). An
+    ``"unknown"`` version on either side is accepted."""
+    try:
+        lib_v = [int(v) for v in library.split(".")[:2]]
+        pkg_v = [int(v) for v in package.split(".")[:2]]
+    except ValueError:
+        return True
+    if len(lib_v) < 2 or len(pkg_v) < 2:
+        return True
+    if lib_v[0] != pkg_v[0]:
+        return False
+    return lib_v[0] != 0 or lib_v[1] == pkg_v[1]
 
 
 _LIB: Optional[ctypes.CDLL] = None

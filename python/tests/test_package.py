@@ -79,3 +79,15 @@ def test_errors_carry_status_and_message():
     assert e.value.status == bh.Status.ERR_INVALID_DIMENSION
     assert e.value.message.startswith("bingham_noise_from_angle_std")
     assert e.value.status_name == "invalid dimension"
+
+
+def test_a_library_of_another_minor_version_is_refused_before_1_0():
+    # 0.x releases may change the layout of the structs passed by value (0.3 removed a field of
+    # the AHRS parameters): the loader refuses a library whose major.minor differs
+    from bingham._library import compatible
+    assert compatible("0.3.0", "0.3.0") and compatible("0.3.2", "0.3.0")
+    assert not compatible("0.2.0", "0.3.0") and not compatible("0.3.0", "0.2.1")
+    assert compatible("1.2.0", "1.4.0") and not compatible("2.0.0", "1.4.0")
+    assert compatible("unknown", "0.3.0") and compatible("0.3.0", "unknown")
+    # the library in use is compatible with the package
+    assert compatible(bh.version(), bh.__version__)
