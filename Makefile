@@ -33,6 +33,8 @@ STRIP ?= strip
 VERSION := $(shell sed -n 's/^version *= *"\([^"]*\)".*/\1/p' Cargo.toml | head -n 1)
 MAJOR := $(firstword $(subst ., ,$(VERSION)))
 MINOR := $(word 2,$(subst ., ,$(VERSION)))
+# The SONAME's version (build.rs): the major version, before 1.0 `0.<minor>`.
+SOVERSION := $(if $(filter 0,$(MAJOR)),$(MAJOR).$(MINOR),$(MAJOR))
 TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
 RELEASE := $(TARGET_DIR)/release
 DEMO_DIR := $(TARGET_DIR)/demo
@@ -196,8 +198,8 @@ install:
 	install -m 644 include/bingham.h include/bingham.hpp include/bingham_eigen.hpp $(DESTDIR)$(INCLUDEDIR)/
 	install -m 644 $(RELEASE)/libbingham.a $(DESTDIR)$(LIBDIR)/libbingham.a
 	install -m 755 $(RELEASE)/libbingham.so $(DESTDIR)$(LIBDIR)/libbingham.so.$(VERSION)
-	ln -sf libbingham.so.$(VERSION) $(DESTDIR)$(LIBDIR)/libbingham.so.$(MAJOR)
-	ln -sf libbingham.so.$(MAJOR) $(DESTDIR)$(LIBDIR)/libbingham.so
+	ln -sf libbingham.so.$(VERSION) $(DESTDIR)$(LIBDIR)/libbingham.so.$(SOVERSION)
+	ln -sf libbingham.so.$(SOVERSION) $(DESTDIR)$(LIBDIR)/libbingham.so
 	$(if $(STRIP),$(STRIP) --strip-unneeded $(DESTDIR)$(LIBDIR)/libbingham.so.$(VERSION))
 	$(if $(STRIP),$(STRIP) --strip-debug $(DESTDIR)$(LIBDIR)/libbingham.a)
 	sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBDIR@|$(PC_LIBDIR)|g' \
@@ -205,6 +207,7 @@ install:
 	    bingham.pc.in > $(DESTDIR)$(LIBDIR)/pkgconfig/bingham.pc
 	set -e; for f in binghamConfig binghamConfigVersion; do \
 	  sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@MAJOR@|$(MAJOR)|g' -e 's|@MINOR@|$(MINOR)|g' \
+	      -e 's|@SOVERSION@|$(SOVERSION)|g' \
 	      -e 's|@CMAKE_PREFIX@|$(CMAKE_PREFIX)|g' -e 's|@CMAKE_LIBDIR@|$(CMAKE_LIBDIR)|g' \
 	      -e 's|@CMAKE_INCLUDEDIR@|$(CMAKE_INCLUDEDIR)|g' -e 's|@SIZEOF_VOID_P@|$(SIZEOF_VOID_P)|g' \
 	      cmake/$$f.cmake.in > $(DESTDIR)$(CMAKEDIR)/$$f.cmake; \
@@ -214,7 +217,7 @@ install:
 uninstall:
 	rm -f $(DESTDIR)$(INCLUDEDIR)/bingham.h $(DESTDIR)$(INCLUDEDIR)/bingham.hpp \
 	      $(DESTDIR)$(INCLUDEDIR)/bingham_eigen.hpp $(DESTDIR)$(LIBDIR)/libbingham.a \
-	      $(DESTDIR)$(LIBDIR)/libbingham.so $(DESTDIR)$(LIBDIR)/libbingham.so.$(MAJOR) \
+	      $(DESTDIR)$(LIBDIR)/libbingham.so $(DESTDIR)$(LIBDIR)/libbingham.so.$(SOVERSION) \
 	      $(DESTDIR)$(LIBDIR)/libbingham.so.$(VERSION) $(DESTDIR)$(LIBDIR)/pkgconfig/bingham.pc \
 	      $(DESTDIR)$(CMAKEDIR)/binghamConfig.cmake $(DESTDIR)$(CMAKEDIR)/binghamConfigVersion.cmake
 	-rmdir $(DESTDIR)$(CMAKEDIR) 2>/dev/null

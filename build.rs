@@ -5,8 +5,16 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     let target = std::env::var("TARGET").unwrap_or_default();
     let major = std::env::var("CARGO_PKG_VERSION_MAJOR").unwrap_or_else(|_| "0".into());
-    // ELF platforms: `libbingham.so` gets the SONAME `libbingham.so.<major>`, so programs linked
-    // against an installed copy record the ABI version (see `make install`).
+    let minor = std::env::var("CARGO_PKG_VERSION_MINOR").unwrap_or_else(|_| "0".into());
+    // ELF platforms: `libbingham.so` gets the SONAME `libbingham.so.<major>` (before 1.0
+    // `libbingham.so.0.<minor>`: a 0.x release may change the ABI, as 0.3 changed the AHRS
+    // parameters), so programs linked against an installed copy record the ABI version and do
+    // not load an incompatible one (see `make install`).
+    let soversion = if major == "0" {
+        format!("0.{minor}")
+    } else {
+        major
+    };
     let os = std::env::var("CARGO_CFG_TARGET_OS").unwrap_or_default();
     if matches!(
         os.as_str(),
@@ -19,7 +27,7 @@ fn main() {
             | "illumos"
             | "solaris"
     ) {
-        println!("cargo:rustc-cdylib-link-arg=-Wl,-soname,libbingham.so.{major}");
+        println!("cargo:rustc-cdylib-link-arg=-Wl,-soname,libbingham.so.{soversion}");
     }
     // For the cc crate in tests/c_tests.rs, which expects build-script-style target information.
     println!("cargo:rustc-env=BINGHAM_BUILD_TARGET={target}");

@@ -15,6 +15,10 @@ trap 'rm -rf "$tmp"' EXIT
 prefix="$tmp/prefix"
 version=$(sed -n 's/^version *= *"\([^"]*\)".*/\1/p' "$root/Cargo.toml" | head -n 1)
 major=${version%%.*}
+# the SONAME's version: the major version, before 1.0 0.<minor> (build.rs)
+minor=${version#*.}
+minor=${minor%%.*}
+if [ "$major" = 0 ]; then soversion="0.$minor"; else soversion="$major"; fi
 
 fail() { echo "install-test: FAILED: $*" >&2; exit 1; }
 
@@ -27,10 +31,10 @@ for f in "include/bingham.h" "include/bingham.hpp" "include/bingham_eigen.hpp" "
     "lib/cmake/bingham/binghamConfigVersion.cmake"; do
     [ -f "$prefix/$f" ] || fail "missing $f"
 done
-[ "$(readlink "$lib/libbingham.so")" = "libbingham.so.$major" ] || fail "libbingham.so -> libbingham.so.$major"
-[ "$(readlink "$lib/libbingham.so.$major")" = "libbingham.so.$version" ] || fail "libbingham.so.$major -> libbingham.so.$version"
-readelf -d "$lib/libbingham.so.$version" | grep -q "Library soname: \[libbingham.so.$major\]" ||
-    fail "SONAME is not libbingham.so.$major"
+[ "$(readlink "$lib/libbingham.so")" = "libbingham.so.$soversion" ] || fail "libbingham.so -> libbingham.so.$soversion"
+[ "$(readlink "$lib/libbingham.so.$soversion")" = "libbingham.so.$version" ] || fail "libbingham.so.$soversion -> libbingham.so.$version"
+readelf -d "$lib/libbingham.so.$version" | grep -q "Library soname: \[libbingham.so.$soversion\]" ||
+    fail "SONAME is not libbingham.so.$soversion"
 # installed without debug info (`make install` strips it; the build keeps it)
 if readelf -S "$lib/libbingham.so.$version" | grep -q '\.debug_info'; then
     fail "libbingham.so has debug info"
@@ -59,11 +63,11 @@ libs=$(pkg-config --libs bingham)
 example="$root/examples/c/cpp_example.cpp"
 flags=(-std=c++11 -Wall -Wextra -Werror -pedantic)
 
-# shared: records libbingham.so.<major>, runs with the installed library
+# shared: records libbingham.so.<soversion>, runs with the installed library
 # shellcheck disable=SC2086
 "$cxx" "${flags[@]}" "$example" $cflags $libs -o "$tmp/example_shared"
-readelf -d "$tmp/example_shared" | grep -q "Shared library: \[libbingham.so.$major\]" ||
-    fail "the program does not record NEEDED libbingham.so.$major"
+readelf -d "$tmp/example_shared" | grep -q "Shared library: \[libbingham.so.$soversion\]" ||
+    fail "the program does not record NEEDED libbingham.so.$soversion"
 LD_LIBRARY_PATH="$lib" "$tmp/example_shared" >/dev/null || fail "shared example did not run"
 
 # static: the archive plus Libs.private, no runtime dependency on libbingham
@@ -128,8 +132,8 @@ CMAKE
 cmake_quiet cmake -S "$pkg" -B "$pkg/build" -DCMAKE_PREFIX_PATH="$prefix" ||
     fail "CMake package: find_package(bingham $want) failed"
 cmake_quiet cmake --build "$pkg/build" || fail "CMake package: build"
-readelf -d "$pkg/build/c_shared" | grep -q "Shared library: \[libbingham.so.$major\]" ||
-    fail "CMake package: bingham::bingham does not record NEEDED libbingham.so.$major"
+readelf -d "$pkg/build/c_shared" | grep -q "Shared library: \[libbingham.so.$soversion\]" ||
+    fail "CMake package: bingham::bingham does not record NEEDED libbingham.so.$soversion"
 for exe in c_static cpp_static; do
     if readelf -d "$pkg/build/$exe" | grep -q "libbingham"; then fail "CMake package: $exe needs libbingham.so"; fi
 done
@@ -159,4 +163,4 @@ check_version "$((major + 1)).0" 0
 [ "$major" = 0 ] && [ "$minor" -gt 0 ] && check_version "0.$((minor - 1))" 0
 cmake_note="shared, static, C, CMake with pkg-config and with find_package(bingham $want)"
 
-echo "install-test: ok ($cmake_note; SONAME libbingham.so.$major)"
+echo "install-test: ok ($cmake_note; SONAME libbingham.so.$soversion)"

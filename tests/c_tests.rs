@@ -126,11 +126,16 @@ fn build(source: &str, name: &str, std: &str, extra: &[&str], link: Link) -> Pat
             cmd.arg(lib.join("libbingham.a"))
                 .args(["-lpthread", "-ldl", "-lm"]);
         }
-        // The library's SONAME is libbingham.so.<major>: provide that name next to the program.
+        // The library's SONAME is libbingham.so.<major> (before 1.0 libbingham.so.0.<minor>,
+        // build.rs): provide that name next to the program.
         Link::Shared => {
             let dir = out_dir().join("shared");
             std::fs::create_dir_all(&dir).expect("create dir");
-            let soname = dir.join(format!("libbingham.so.{}", env!("CARGO_PKG_VERSION_MAJOR")));
+            let soversion = match env!("CARGO_PKG_VERSION_MAJOR") {
+                "0" => format!("0.{}", env!("CARGO_PKG_VERSION_MINOR")),
+                major => major.to_string(),
+            };
+            let soname = dir.join(format!("libbingham.so.{soversion}"));
             let _ = std::fs::remove_file(&soname);
             std::os::unix::fs::symlink(lib.join("libbingham.so"), &soname).expect("symlink");
             cmd.arg("-L")
