@@ -602,11 +602,13 @@ fn step(
     let scale = p.gyro_scale_noise * rate;
     // at most 1 rad² per sample: a wider noise is uniform for all purposes
     let q = ((p.gyro_noise * p.gyro_noise + scale * scale) * dt).min(1.0);
-    let mut drift = if p.bias_time > 0.0 {
-        p.bias_std * p.bias_std / p.bias_time * dt
+    // the bias's random walk: variance per second
+    let walk = if p.bias_time > 0.0 {
+        p.bias_std * p.bias_std / p.bias_time
     } else {
         0.0
     };
+    let mut drift = walk * dt;
     // Over a rest the bias is one constant, which the rest's samples measure (module `rest`):
     // its random walk is held, and added when the rest ends as the variance of a random walk's
     // end about its mean over the phase (a third of the walk's variance over the phase).
@@ -614,7 +616,7 @@ fn step(
         s.rest_held += dt;
         drift = 0.0;
     } else if s.rest_held > 0.0 {
-        drift += drift / dt * s.rest_held / 3.0;
+        drift += walk * s.rest_held / 3.0;
         s.rest_held = 0.0;
     }
     let r = q4::to_matrix(&dq);
