@@ -40,7 +40,7 @@
 //! (the same values, since both densities integrate to 1; the integrands are ≥ 0 pointwise).
 //!
 //! `cargo test --release --test glover_composition_kl -- --nocapture` prints the tables; figures
-//! and the comparison with the paper: `docs/accuracy.md`.
+//! and the comparison with the paper: `docs/accuracy/filter.md`.
 
 mod glover_common;
 
@@ -460,7 +460,7 @@ fn composition_kl_for_the_paper_settings() {
          {max:.2e}  (paper: mean 1.2e-3, max 1.97e-2)"
     );
     // measured: the eight with an isotropic component 2.5e-5 … 6.6e-4; the anisotropic pair
-    // 1.3e-3 … 3.9e-2 (see docs/accuracy.md); bounds a factor of about 2 from the measurement
+    // 1.3e-3 … 3.9e-2 (see docs/accuracy/filter.md); bounds a factor of about 2 from the measurement
     assert!(nine.iter().all(|&k| k < 1.5e-3), "{nine:?}");
     assert!(sweep[23] < 0.08 && sweep[0] > 1e-4, "{sweep:?}");
 }

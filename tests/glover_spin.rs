@@ -74,7 +74,7 @@
 //! `cargo test --release --test glover_spin -- --nocapture` prints the curves; with
 //! `BINGHAM_SPIN_CSV=spin.csv` it also writes them (a relative path is taken in
 //! `$CARGO_TARGET_DIR`, else `target/`) for `scripts/plot_spin.py` (`docs/spin_tracking.svg`).
-//! Figures and the comparison with the paper: `docs/accuracy.md`.
+//! Figures and the comparison with the paper: `docs/accuracy/filter.md`.
 
 mod glover_common;
 // the simulated balls and QBF-2, shared with tests/glover_spin_failures.rs

@@ -1,6 +1,6 @@
 //! What sets QBF-2's spin error on the simulated ping-pong balls of `tests/glover_spin.rs`
 //! (Glover & Kaelbling 2013, Sec. 6; issue 22): the noise levels, and what its gross failures
-//! are. Figures and discussion: docs/accuracy.md, "Spin tracking on simulated ping-pong balls".
+//! are. Figures and discussion: docs/accuracy/filter.md, "Spin tracking on simulated ping-pong balls".
 
 #[path = "glover_common/ball.rs"]
 mod ball;

@@ -55,7 +55,7 @@
 //! `100 (1 − e_QBF/e_EKF)` with its standard error — the paper's "average % mean error decrease"
 //! (Table 1: 37.3, 45.6, 54.3, 19.9, 3.33, 1.52, 3.42, 0.72, 0.47; QBF better on 268/270 runs).
 //! What each test asserts, and why, is in its doc comment. Printed with `--nocapture`; the report
-//! is in `docs/accuracy.md`. The test `table1_ekf_variants` (with `BINGHAM_TABLE1_VARIANTS=1`) runs weaker EKFs (noise not
+//! is in `docs/accuracy/filter.md`. The test `table1_ekf_variants` (with `BINGHAM_TABLE1_VARIANTS=1`) runs weaker EKFs (noise not
 //! rotated into the state's frame, anisotropy averaged away) to show where the paper's larger
 //! margins can come from.
 //!

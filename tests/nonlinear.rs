@@ -535,7 +535,7 @@ fn nonlinear_camera_update_against_monte_carlo() {
     // prior down to a tenth of it.
     camera_case(&[-400.0, -200.0, -100.0, 0.0], Some(2.0));
     // A broad prior (0.42 rad): the posterior is visibly not a Bingham distribution and the
-    // single Bingham fit is off by up to 10 standard errors (measured, docs/accuracy.md); still
+    // single Bingham fit is off by up to 10 standard errors (measured, docs/accuracy/nonlinear.md); still
     // 20x closer than the TAC 2016 points reweighted once.
     camera_case(&[-40.0, -25.0, -12.0, 0.0], None);
 }

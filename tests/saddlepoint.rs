@@ -77,7 +77,7 @@ fn table(d: usize, zs: &[Vec<f64>]) -> Stats {
 fn assert_approximate(st: &Stats) {
     // Not exact: every grid point is off by more than 1e-5 (the smallest errors are near the
     // uniform distribution); not wildly wrong: below 10 % (the largest are at moderate
-    // concentration around one direction). Measured values: docs/accuracy.md.
+    // concentration around one direction). Measured values: docs/accuracy/normalization.md.
     assert!(st.min_f > 1e-5, "suspiciously exact: {:e}", st.min_f);
     assert!(st.max_f < 1e-1, "too inaccurate: {:e}", st.max_f);
     assert!(st.max_w < 1e-1, "ω too inaccurate: {:e}", st.max_w);

@@ -5,7 +5,7 @@
 //! digits, round-trip exact), so the measured error is the error relative to the correctly rounded
 //! result. `cargo test --release --test special -- --nocapture` prints the maxima over the 11224
 //! reference points per range (relative error / in ulps of the reference value); they are
-//! recorded in `docs/accuracy.md` (§ "Bessel functions").
+//! recorded in `docs/accuracy/normalization.md` (§ "Bessel functions").
 //!
 //! The asserted bound, 1e-15 relative for all four (about 4.5 ulp at the bottom of a binade), is
 //! 2.5 times the worst measured error: room for other compilers and platforms (nothing here depends

@@ -12,7 +12,7 @@ truth: the online estimate (``Ahrs.mag_latency_estimate``) and the compensation 
    ``latency10`` at 100, 286 and 1000 Hz (noise of constant density: per-sample noise ×√(f/100)).
 
 Needs the ``bingham`` package (``pip install ./python``, or ``BINGHAM_LIB`` and
-``PYTHONPATH=python``) and NumPy; docs/accuracy.md ("Sensor latency") quotes its output.
+``PYTHONPATH=python``) and NumPy; docs/accuracy/ahrs.md ("Sensor latency") quotes its output.
 """
 
 import argparse

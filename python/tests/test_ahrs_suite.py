@@ -1,6 +1,6 @@
 """The AHRS's defaults on the simulated-IMU suite (examples/python/ahrs_suite.py, seed 20, 60 s),
 against the simulator's known truth: what issue 20's second round achieved, held as a regression
-test (docs/accuracy.md § "Simulated IMU suite" has the full table with VQF and Madgwick).
+test (docs/accuracy/ahrs.md § "Simulated IMU suite" has the full table with VQF and Madgwick).
 
 - every gyro-bias scenario (0.2 / 0.5 / 1 °/s, 0 / 2 / 10 s of initial rest): the bias estimate
   within 10 % of the truth after 60 s (measured 0.3–2.6 %) and the total RMS error from 10 s on

@@ -2,7 +2,7 @@
 
 Runs only when the trials are present (``$BROAD_DIR`` or ``../shared/data/broad`` beside the
 repository). Asserts the documented accuracy of the default parameters: the mean total RMSE over
-the nine trials within 5 % of the figure in docs/accuracy.md, every trial better than Madgwick's
+the nine trials within 5 % of the figure in docs/accuracy/ahrs.md, every trial better than Madgwick's
 published figure on the same data, and the uncertainty readout's calibration.
 Data: BROAD (Laidig, Caruso, Cereatti, Seel, Data 6(7):72, 2021, doi:10.3390/data6070072),
 CC BY 4.0.
@@ -18,7 +18,7 @@ import pytest
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "examples", "python"))
 import broad  # noqa: E402
 
-# docs/accuracy.md's figure for the default parameters (mean total RMSE over the nine trials, degrees).
+# docs/accuracy/ahrs.md's figure for the default parameters (mean total RMSE over the nine trials, degrees).
 DOCUMENTED_MEAN_TOTAL = 2.07
 # What the peers achieve on the same nine trials (the data's README; reproduced by broad.py).
 MADGWICK = {"02": 1.67, "07": 4.51, "09": 2.53, "11": 3.91, "16": 4.41, "25": 3.33,
@@ -65,7 +65,7 @@ def test_group_means_better_than_madgwick(results):
 def test_spread_is_calibrated_overall(results):
     # RMS of the actual error / RMS of the predicted spread, over the movement samples: the
     # median trial within [0.5, 2] and every trial but 27 (per-trial figures are in
-    # docs/accuracy.md; trial 27's field is steadily off by ~7 degrees, an error no sensor here
+    # docs/accuracy/ahrs.md; trial 27's field is steadily off by ~7 degrees, an error no sensor here
     # can see).
     ratios = sorted(r["calibration_ratio"] for r in results.values())
     assert 0.5 <= ratios[len(ratios) // 2] <= 2.0, ratios
