@@ -578,14 +578,6 @@ Distribution vector_observation(const Eigen::MatrixBase<DB> &body, const Eigen::
 
 // ---- the recursive Bingham filter ------------------------------------------------------------
 
-/// The recursive Bingham filter (d = 2: axes as complex numbers; d = 4: orientations as
-/// quaternions, scalar first). Owns a `bingham_filter *`; move-only, copy with clone().
-///
-/// Model: x[k+1] = x[k] (+) w[k], measurement = x[k] (+) v[k], with Bingham noises w, v (pass the
-/// same noise object every step: the library caches its moments); the world-frame steps
-/// predict_world(), update_world(), log_likelihood_world() have Glover & Kaelbling's model
-/// x[k+1] = w[k] o u[k] o x[k], y = v o x (noises on the left). A moved-from Filter is empty:
-/// its methods throw Error(BINGHAM_ERR_NULL_ARGUMENT); destroying or assigning to it is fine.
 /// How the nonlinear steps control their error (bingham_nonlinear_options); the defaults are
 /// the library's: tolerance 0 = the step's own default (BINGHAM_NONLINEAR_PREDICT_TOLERANCE,
 /// BINGHAM_NONLINEAR_UPDATE_TOLERANCE), mode tolerance 0.05 spreads, 20000 calls.
@@ -603,6 +595,14 @@ struct NonlinearOptions {
 /// What a nonlinear step measured (see bingham_nonlinear_report).
 using NonlinearReport = bingham_nonlinear_report;
 
+/// The recursive Bingham filter (d = 2: axes as complex numbers; d = 4: orientations as
+/// quaternions, scalar first). Owns a `bingham_filter *`; move-only, copy with clone().
+///
+/// Model: x[k+1] = x[k] (+) w[k], measurement = x[k] (+) v[k], with Bingham noises w, v (pass the
+/// same noise object every step: the library caches its moments); the world-frame steps
+/// predict_world(), update_world(), log_likelihood_world() have Glover & Kaelbling's model
+/// x[k+1] = w[k] o u[k] o x[k], y = v o x (noises on the left). A moved-from Filter is empty:
+/// its methods throw Error(BINGHAM_ERR_NULL_ARGUMENT); destroying or assigning to it is fine.
 class Filter {
 public:
     /// A filter with the initial estimate `initial` (d = 2 or 4).
@@ -662,10 +662,10 @@ public:
         detail::check_callback(st, c);
     }
     /// Nonlinear prediction with its error controlled by `opts` (bingham_filter_predict_nonlinear_opts):
-    /// the 19 deterministic points where their error estimate is below a tenth of the
-    /// tolerance, randomized quasi-Monte Carlo to the tolerance otherwise. Returns what was
-    /// measured; a tolerance not met within `opts.max_calls` throws
-    /// Error(BINGHAM_ERR_NOT_CONVERGED) with the estimate in its message (the filter unchanged).
+    /// the result's error estimate (3 standard errors of any entry of the predicted second
+    /// moment) meets `opts.tolerance`. Returns what was measured; a tolerance not met within
+    /// `opts.max_calls` throws Error(BINGHAM_ERR_NOT_CONVERGED) with the estimate in its message
+    /// (the filter unchanged). The method: docs/design.md, "Nonlinear steps".
     template <class F>
     NonlinearReport predict_nonlinear(F &&a, const Distribution &noise, const NonlinearOptions &opts) {
         check_noise(noise, "bingham::Filter::predict_nonlinear");
@@ -680,8 +680,9 @@ public:
     }
     /// Nonlinear update: posterior prop. to prior(x) L(x) (bingham_filter_update_nonlinear).
     /// `log_l` is any callable `double(const double *x)` returning log L(x) (finite) for a unit
-    /// vector x of d() entries (L(-x) = L(x) is the caller's contract); called at the samples
-    /// of several iterations (see bingham_filter_update_nonlinear). An exception thrown by
+    /// vector x of d() entries (L(-x) = L(x) is the caller's contract); called at the
+    /// deterministic samples of a few rounds and at sampled points (default tolerances; see the
+    /// overload with NonlinearOptions), on this thread. An exception thrown by
     /// `log_l` stops the update and is rethrown here; a non-finite value throws
     /// Error(BINGHAM_ERR_CALLBACK). In both cases the filter is unchanged.
     template <class F>
@@ -694,10 +695,11 @@ public:
     }
 
     /// Nonlinear update with its error controlled by `opts` (bingham_filter_update_nonlinear_opts):
-    /// the deterministic approximation checked and corrected by randomized quasi-Monte Carlo
-    /// importance sampling until 3 standard errors meet the tolerances. Returns what was
-    /// measured; tolerances not met within `opts.max_calls` throw
+    /// every update is checked by sampling; its error estimates (3 standard errors of the
+    /// second moment's entries and of the mode) meet `opts.tolerance` and `opts.mode_tolerance`.
+    /// Returns what was measured; tolerances not met within `opts.max_calls` throw
     /// Error(BINGHAM_ERR_NOT_CONVERGED) with the estimates in its message (the filter unchanged).
+    /// The method: docs/design.md, "Nonlinear steps".
     template <class F>
     NonlinearReport update_nonlinear(F &&log_l, const NonlinearOptions &opts) {
         require("bingham::Filter::update_nonlinear");
@@ -1117,7 +1119,8 @@ private:
 // ---- the AHRS --------------------------------------------------------------------------------
 
 /// The AHRS parameters (the C struct; angles rad, times s). Start from ahrs_default_params() or
-/// ahrs_params_from_rate().
+/// ahrs_params_from_rate(); each field's meaning and default: docs/design.md, "AHRS"
+/// ("Parameters").
 using AhrsParams = bingham_ahrs_params;
 
 /// The tuned default parameters for the sampling period `sample_time` (seconds: the period, not
@@ -1142,6 +1145,8 @@ inline AhrsParams ahrs_params_from_rate(double hz) {
 /// move-only, copy with clone(). The orientation maps sensor to world ENU (x east, y north,
 /// z up); gyroscope rad/s, accelerometer m/s^2 (+g up at rest), magnetometer any unit.
 /// A moved-from Ahrs is empty: its methods throw Error(BINGHAM_ERR_NULL_ARGUMENT).
+/// Contract: docs/guide.md, "IMU orientation (AHRS)"; design and parameters: docs/design.md,
+/// "AHRS".
 class Ahrs {
 public:
     /// With the default parameters for the sampling period `sample_time` (s: the period, not the

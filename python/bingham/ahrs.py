@@ -31,14 +31,15 @@ HEALTH_TIME = 5.0
 class AhrsHealth(ctypes.Structure):
     """``bingham_ahrs_health_report``, the AHRS's health readout (see :meth:`Ahrs.health`).
 
-    ``score``: the larger of ``tilt_score`` and ``heading_score``, about 1 when the sensors
-    agree with the model, above :data:`HEALTH_THRESHOLD` (10) an input mistake is likely (a
-    gyroscope in °/s, a wrong sample time, swapped magnetometer axes); ``tilt_innovation`` and
+    ``score``: the largest of ``gravity_score``, ``tilt_score`` and ``heading_score``, about 1
+    (or less) when the sensors agree with the model, above :data:`HEALTH_THRESHOLD` (10) an
+    input mistake is likely (a gyroscope in °/s, a wrong sample time); ``tilt_innovation`` and
     ``heading_innovation`` (rad) at the last correction; ``mag_rejected`` the fraction of
     magnetometer samples refused as disturbed over the last :data:`HEALTH_TIME` seconds;
     ``mag_dip`` (rad, positive below the horizon) the reference field's dip, valid when
     ``has_mag_reference`` is 1 — of the wrong sign for the place (negative north of the
-    magnetic equator), the accelerometer's sign is flipped."""
+    magnetic equator), the accelerometer's sign is flipped. All zero before the first
+    correction. Definitions: docs/guide.md, "Health readout"."""
 
     _fields_ = [
         ("score", ctypes.c_double),
@@ -67,14 +68,14 @@ class AhrsParams(ctypes.Structure):
     structure of zeros is not a valid parameter set). :meth:`copy` gives an independent copy;
     :class:`Ahrs` never modifies the instance it is given.
 
-    ``mag_latency`` / ``acc_latency`` (s, 0 to
-    0.5, default 0): the magnetometer's / accelerometer's latency behind the gyroscope, each
-    sample turned forward by the rate over it (see :meth:`Ahrs.mag_latency_estimate`).
-    ``bias_std`` (rad/s, > 0, default 0.5°/s): the initial standard deviation per axis of the
-    gyroscope bias, where its covariance starts (see :meth:`Ahrs.gyro_bias_covariance`).
-    ``gyro_scale_noise`` (√s, >= 0, default about 0.01): process noise per rad/s of rotation
-    rate, the orientation's noise variance growing by ``(gyro_scale_noise·|ω|)²`` per second
-    (scale-factor and misalignment errors of the gyroscope)."""
+    The fields, their units and defaults are those of the C struct (docs/guide.md, "The
+    defaults and why"); what each means and why its default: docs/design.md, "AHRS"
+    ("Parameters"). For example ``mag_latency`` / ``acc_latency`` (s, 0 to 0.5; defaults
+    :data:`LATENCY_ESTIMATE` and 0): the magnetometer's / accelerometer's latency behind the
+    gyroscope (see :meth:`Ahrs.mag_latency_estimate`); ``bias_std`` (rad/s, > 0, default
+    0.5°/s): the initial standard deviation per axis of the gyroscope bias (see
+    :meth:`Ahrs.gyro_bias_covariance`); ``gyro_scale_noise`` (√s, >= 0, default 0.004): process
+    noise per rad/s of rotation rate."""
 
     _fields_ = [
         ("sample_time", ctypes.c_double),

@@ -223,9 +223,9 @@ def deterministic_samples(
 
     * ``scheme="moments"``: ``2d² − 4d + 3`` points (3, 9, 19 for d = 2, 3, 4) reproducing every
       second and fourth moment (``reproduced == 4``); where no positive point set of that kind
-      exists (about 5 % of random z for d = 4: a very broad axis next to a moderately sharp
-      one) the ``2d − 1`` points of ``"tac2016"`` with ``lam = 0.5`` instead
-      (``reproduced == 2``). ``lam`` is ignored.
+      exists (for some z with d = 4: a very broad axis next to a moderately sharp one; how
+      often: docs/accuracy/nonlinear.md) the ``2d − 1`` points of ``"tac2016"`` with
+      ``lam = 0.5`` instead (``reproduced == 2``). ``lam`` is ignored.
     * ``scheme="tac2016"``: the ``2d − 1`` points of Gilitschenski et al. (IEEE TAC 2016) with
       the weighting parameter ``lam`` in ``[0, 1]`` (the mode gets the weight ``lam · ω_mode``,
       ω_mode = E[(mode·x)²]; libDirectional's default is 0.5); they reproduce the second

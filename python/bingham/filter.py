@@ -190,13 +190,13 @@ class Filter(_Handle):
     ) -> NonlinearReport:
         """Nonlinear prediction ``x[k+1] = fn(x[k]) ⊕ w[k]``, w ~ Bingham(m_w, z_w).
 
-        The predicted second moment comes from the deterministic samples of the state (19
-        calls for d = 4, 3 for d = 2), accepted where their embedded error estimate is below a
-        tenth of ``tolerance`` (default :data:`PREDICT_TOLERANCE`; exact models such as a
-        rotation always are), otherwise from randomized quasi-Monte Carlo refined until 3
-        standard errors meet ``tolerance``; beyond ``max_calls`` calls (default 20000)
-        :class:`BinghamError` with status ``ERR_NOT_CONVERGED`` is raised and the filter is
-        unchanged. Returns a :class:`NonlinearReport`.
+        ``fn`` is called at the deterministic samples of the state (19 calls for d = 4, 3 for
+        d = 2) and, where their error estimate asks for more, at sampled points. The result's
+        error estimate (3 standard errors of any entry of the predicted second moment) meets
+        ``tolerance`` (default :data:`PREDICT_TOLERANCE`); if that would take more than
+        ``max_calls`` calls (default 20000), :class:`BinghamError` with status
+        ``ERR_NOT_CONVERGED`` is raised and the filter is unchanged. Returns a
+        :class:`NonlinearReport`. The method: docs/design.md, "Nonlinear steps".
 
         ``fn`` is called with a unit vector
         ``x`` (a NumPy array of length d, a copy the callable may keep) and must return a unit
@@ -245,24 +245,17 @@ class Filter(_Handle):
     ) -> NonlinearReport:
         """Nonlinear Bayes update: posterior ∝ prior(x) · L(x), ``log_likelihood(x)`` = log L(x).
 
-        Every update is checked: the deterministic approximation below is corrected by
-        randomized quasi-Monte Carlo importance sampling around it until 3 standard errors of
-        every entry of the posterior's second moment meet ``tolerance`` (default
-        :data:`UPDATE_TOLERANCE`) and those of the mode ``mode_tolerance`` (default 0.05) of the
-        posterior's spread; beyond ``max_calls`` calls (default 20000) :class:`BinghamError`
-        with status ``ERR_NOT_CONVERGED`` is raised (its message gives the estimate reached) and
-        the filter is unchanged. Returns a :class:`NonlinearReport`.
+        The posterior is approximated by a Bingham distribution and every update is checked by
+        sampling: 3 standard errors of every entry of its second moment meet ``tolerance``
+        (default :data:`UPDATE_TOLERANCE`) and those of the mode ``mode_tolerance`` (default
+        0.05) of the posterior's spread; if that would take more than ``max_calls`` calls
+        (default 20000), :class:`BinghamError` with status ``ERR_NOT_CONVERGED`` is raised (its
+        message gives the estimate reached) and the filter is unchanged. Returns a
+        :class:`NonlinearReport`. The method: docs/design.md, "Nonlinear steps".
 
         ``log_likelihood`` gets a unit vector ``x`` (a NumPy array of length d, a copy) and
-        returns a finite float; ``L(-x) = L(x)`` is the caller's contract. The update is
-        progressive (tempered): a Bingham exponent is fitted to ``log L`` at the deterministic
-        samples of the current approximation (19 calls per round for d = 4, 5 for d = 2) and
-        multiplied in as ``exp(Δβ xᵀPx)``, with ``Δβ`` such that the part of ``log L`` the fit
-        misses contributes at most ``TEMPERING_RESIDUAL = 1`` per step (a Bingham likelihood is
-        absorbed exactly, in one step), then two importance-weighted moment matches correct the
-        result (at most 200 steps; beyond that ``ERR_NOT_CONVERGED``), before the sampled check
-        above; for a Bingham likelihood :meth:`update` and :func:`multiply` are exact and need
-        no callback.
+        returns a finite float; ``L(-x) = L(x)`` is the caller's contract. A Bingham likelihood
+        stays exact, but :meth:`update` and :func:`multiply` compute it without callbacks.
 
         ``log_likelihood`` must not use this filter. If it raises or returns a non-finite value,
         the filter is unchanged and :class:`BinghamError` with status ``ERR_CALLBACK`` is raised
