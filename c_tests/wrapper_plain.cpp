@@ -21,6 +21,7 @@
 //   same state, and the states stay equal (a measurement in (x, y, z, w) order gated out, the
 //   filter unchanged); NaN / negative max_surprise throw with the C call's status and message;
 // - Ahrs::health() equals bingham_ahrs_health field by field; all zero on a fresh AHRS.
+// - bingham::NonlinearOptions{} holds the defaults of bingham_nonlinear_options_default.
 //
 // Built as C++17 and as C++20 with -Wall -Wextra -Werror -pedantic (tests/c_tests.rs) and under
 // ASan + UBSan + LSan (scripts/sanitize.sh).
@@ -495,6 +496,14 @@ static void test_filter_nonlinear() {
 
     // The options forms: the report, and a budget too small refused with the filter unchanged.
     bingham::NonlinearOptions o;
+    {
+        // the wrapper's defaults (member initializers) are the library's
+        bingham_nonlinear_options dc;
+        std::memset(&dc, 0xA5, sizeof dc);
+        CHECK_OK(bingham_nonlinear_options_default(&dc));
+        const bingham_nonlinear_options oc = o.c();
+        CHECK(oc.tolerance == dc.tolerance && oc.mode_tolerance == dc.mode_tolerance && oc.max_calls == dc.max_calls);
+    }
     int n = 0;
     const bingham::NonlinearReport rp = f.predict_nonlinear(
         [&](const double *x, double *out) {

@@ -2,9 +2,10 @@
 //!
 //! One case is an AHRS (sample time, latencies, bias_std and gyro_scale_noise sometimes hostile;
 //! valid values kept, so the compensation and the bias's uncertainty run on the hostile samples
-//! too) fed a simulated IMU stream through bingham_ahrs_update and the batch functions, with
+//! too) fed a simulated IMU stream through bingham_ahrs_update and the three batch functions
+//! (`_update_batch`, `_spread`, `_health`; the optional outputs sometimes NULL), with
 //! hostile samples mixed in (NaN/Inf, zero and huge vectors, subnormals, NULL and misaligned
-//! pointers, a NaN in the middle of a batch) and
+//! pointers, also for every argument of a batch, a NaN in the middle of a batch) and
 //! bingham_ahrs_set_state calls (valid starts near the truth, any orthogonal M, huge / tiny /
 //! repeated z, z spanning more than a double, non-orthogonal M, NaN/Inf), and a twin that
 //! receives only the calls that were accepted. A NaN/Inf gyroscope entry must be refused, a
@@ -12,7 +13,10 @@
 //! accepted (except the accelerometer of the first sample, refused: no tilt to start from).
 //! After every call: a refused call leaves the AHRS
 //! bit-for-bit unchanged (quaternion, state, bias, spread, and the hidden state, through the
-//! twin) and the message names the function (and for a batch the sample); accepted calls leave a
+//! twin) and the message names the function (and for a batch the sample); a batch writes the
+//! rows of the samples before the refused one only, and nothing on a NULL / misaligned argument;
+//! its quaternion, spread and health rows equal, bit for bit, what the twin's getters give after
+//! it replays the same samples one by one; accepted calls leave a
 //! unit quaternion with w ≥ 0, a valid Bingham state, finite bias and spread; after set_state
 //! the state is the normalized Bingham(M, z) and the quaternion ± its mode.
 
@@ -337,51 +341,125 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                         bad = Some(k);
                     }
                 }
-                let with_spread = rng.chance(0.5);
+                // the three batch forms: quaternions only, with the spread, with the spread and
+                // the health score (each optional output sometimes NULL: not wanted)
+                let variant = rng.below(3);
+                let with_spread = variant >= 1;
+                let with_health = variant == 2;
                 let spread_null = with_spread && rng.chance(0.3);
+                let health_null = with_health && rng.chance(0.3);
                 let (mut bg, mut ba, mut bm) = (Buf::from(&g), Buf::from(&ac), Buf::from(&mg));
                 let mut bq = Buf::sentinel(4 * n);
                 let mut bs = Buf::sentinel(n);
-                let mp = if mag_null {
+                let mut bh = Buf::sentinel(n);
+                let mut ap = a;
+                let mut gp = bg.ptr() as *const f64;
+                let mut acp = ba.ptr() as *const f64;
+                let mut mp = if mag_null {
                     std::ptr::null()
                 } else {
                     bm.ptr() as *const f64
                 };
-                let sp = if spread_null {
+                let mut qp = bq.ptr();
+                let mut sp = if spread_null {
                     std::ptr::null_mut()
                 } else {
                     bs.ptr()
                 };
-                let name = if with_spread {
-                    "bingham_ahrs_update_batch_spread"
+                let mut hp = if health_null {
+                    std::ptr::null_mut()
                 } else {
-                    "bingham_ahrs_update_batch"
+                    bh.ptr()
+                };
+                // a NULL / misaligned argument (the arrays only for n > 0: no array is read
+                // for n = 0), refused before any sample; NULL means "none" for mag, spread and
+                // health, so those are only misaligned
+                let mut attack = String::new();
+                if rng.chance(0.08) {
+                    let which = rng.below(if n > 0 { 7 } else { 1 });
+                    let null = which < 4 && rng.chance(0.5);
+                    let off = 1 + rng.below(7);
+                    let passed = match which {
+                        4 => !mag_null,
+                        5 => with_spread && !spread_null,
+                        6 => with_health && !health_null,
+                        _ => true,
+                    };
+                    if passed {
+                        match (which, null) {
+                            (0, true) => ap = std::ptr::null_mut(),
+                            (0, false) => ap = a.cast::<u8>().wrapping_add(4).cast(),
+                            (1, true) => gp = std::ptr::null(),
+                            (1, false) => gp = bg.misaligned(off),
+                            (2, true) => acp = std::ptr::null(),
+                            (2, false) => acp = ba.misaligned(off),
+                            (3, true) => qp = std::ptr::null_mut(),
+                            (3, false) => qp = bq.misaligned(off),
+                            (4, _) => mp = bm.misaligned(off),
+                            (5, _) => sp = bs.misaligned(off),
+                            _ => hp = bh.misaligned(off),
+                        }
+                        let arg = ["a", "gyr", "acc", "quat", "mag", "spread", "health"][which];
+                        attack = if null {
+                            format!("{arg} NULL")
+                        } else {
+                            format!("{arg} misaligned")
+                        };
+                    }
+                }
+                let name = match variant {
+                    0 => "bingham_ahrs_update_batch",
+                    1 => "bingham_ahrs_update_batch_spread",
+                    _ => "bingham_ahrs_update_batch_health",
                 };
                 prime_last_error(name);
                 let st = unsafe {
-                    if with_spread {
-                        bingham_ahrs_update_batch_spread(a, n, bg.ptr(), ba.ptr(), mp, bq.ptr(), sp)
-                    } else {
-                        bingham_ahrs_update_batch(a, n, bg.ptr(), ba.ptr(), mp, bq.ptr())
+                    match variant {
+                        0 => bingham_ahrs_update_batch(ap, n, gp, acp, mp, qp),
+                        1 => bingham_ahrs_update_batch_spread(ap, n, gp, acp, mp, qp, sp),
+                        _ => bingham_ahrs_update_batch_health(ap, n, gp, acp, mp, qp, sp, hp),
                     }
                 };
                 calls += 1;
                 if verbose {
                     eprintln!(
-                        "step {step}: {name} n = {n}, spoiled {spoiled:?}, bad {bad:?} -> {}",
+                        "step {step}: {name} n = {n}, spoiled {spoiled:?}, bad {bad:?} {attack} -> {}",
                         status_name(st)
                     );
                 }
                 if st == BINGHAM_ERR_PANIC {
                     return Err(format!("panic: {}", last_error()));
                 }
-                {
+                let inputs_kept = |b: &Buf, v: &[f64]| {
+                    b.guards_ok()
+                        && b.values()
+                            .iter()
+                            .zip(v)
+                            .all(|(x, y)| x.to_bits() == y.to_bits())
+                };
+                if !inputs_kept(&bg, &g) || !inputs_kept(&ba, &ac) || !inputs_kept(&bm, &mg) {
+                    return Err(format!("{name} modified an input"));
+                }
+                if !attack.is_empty() {
                     expect(
                         st,
-                        bad.map(|_| BINGHAM_ERR_INVALID_ARGUMENT),
-                        &format!("bad sample {bad:?}"),
+                        Some(BINGHAM_ERR_NULL_ARGUMENT),
+                        &format!("{name} ({attack})"),
                     )?;
+                    check_error_message(name)?;
+                    if !bq.untouched() || !bs.untouched() || !bh.untouched() {
+                        return Err(format!("{name} ({attack}) wrote an output"));
+                    }
+                    if ahrs_bits(a)? != before {
+                        return Err(format!("{name} ({attack}) changed the AHRS"));
+                    }
+                    return Ok(());
                 }
+                expect(
+                    st,
+                    bad.map(|_| BINGHAM_ERR_INVALID_ARGUMENT),
+                    &format!("bad sample {bad:?}"),
+                )?;
                 // how many samples were processed
                 let done = if st == BINGHAM_OK {
                     n
@@ -410,19 +488,15 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                 };
                 let q = bq.values();
                 let s = bs.values();
-                if !bq.guards_ok() || !bs.guards_ok() {
+                let h = bh.values();
+                if !bq.guards_ok() || !bs.guards_ok() || !bh.guards_ok() {
                     return Err("guard words overwritten".into());
                 }
-                for k in 0..n {
+                for k in 0..done {
                     let row = &q[4 * k..4 * k + 4];
-                    if k < done {
-                        check_unit(row, 1e-12).map_err(|e| format!("quat row {k}: {e}"))?;
-                        if row[0] < 0.0 {
-                            return Err(format!("quat row {k} with w < 0"));
-                        }
-                        if with_spread && !spread_null && !(s[k].is_finite() && s[k] >= 0.0) {
-                            return Err(format!("spread[{k}] = {}", s[k]));
-                        }
+                    check_unit(row, 1e-12).map_err(|e| format!("quat row {k}: {e}"))?;
+                    if row[0] < 0.0 {
+                        return Err(format!("quat row {k} with w < 0"));
                     }
                 }
                 if !bq.untouched_range(4 * done, 4 * n) {
@@ -430,13 +504,19 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                         "quat rows from the refused sample {done} on were written"
                     ));
                 }
-                if (spread_null || !with_spread) && !bs.untouched() {
-                    return Err("spread written although not passed".into());
+                for (wanted, null, b, what) in [
+                    (with_spread, spread_null, &bs, "spread"),
+                    (with_health, health_null, &bh, "health"),
+                ] {
+                    if (null || !wanted) && !b.untouched() {
+                        return Err(format!("{what} written although not passed"));
+                    }
+                    if wanted && !null && !b.untouched_range(done, n) {
+                        return Err(format!("{what} written from the refused sample on"));
+                    }
                 }
-                if with_spread && !spread_null && !bs.untouched_range(done, n) {
-                    return Err("spread written from the refused sample on".into());
-                }
-                // the twin replays the processed samples one by one
+                // the twin replays the processed samples one by one: the same quaternion, total
+                // spread and health score after each
                 for k in 0..done {
                     let st = unsafe {
                         bingham_ahrs_update(
@@ -454,6 +534,39 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                         return Err(format!(
                             "twin refused sample {k} of an accepted batch: {}",
                             last_error()
+                        ));
+                    }
+                    let (mut tq, mut ts) = ([0.0; 4], [0.0; 4]);
+                    let mut th: bingham_ahrs_health_report = unsafe { std::mem::zeroed() };
+                    let sts = unsafe {
+                        [
+                            bingham_ahrs_quaternion(twin, tq.as_mut_ptr()),
+                            bingham_ahrs_angular_spread(twin, ts.as_mut_ptr()),
+                            bingham_ahrs_health(twin, &mut th),
+                        ]
+                    };
+                    if sts.iter().any(|&st| st != BINGHAM_OK) {
+                        return Err(format!("twin getters: {}", last_error()));
+                    }
+                    let same = |x: &[f64], y: &[f64]| {
+                        x.iter().zip(y).all(|(a, b)| a.to_bits() == b.to_bits())
+                    };
+                    if !same(&q[4 * k..4 * k + 4], &tq) {
+                        return Err(format!(
+                            "quat row {k} {:?} differs from the twin's {tq:?}",
+                            &q[4 * k..4 * k + 4]
+                        ));
+                    }
+                    if with_spread && !spread_null && s[k].to_bits() != ts[3].to_bits() {
+                        return Err(format!(
+                            "spread[{k}] = {:e}, the twin's total spread {:e}",
+                            s[k], ts[3]
+                        ));
+                    }
+                    if with_health && !health_null && h[k].to_bits() != th.score.to_bits() {
+                        return Err(format!(
+                            "health[{k}] = {:e}, the twin's health score {:e}",
+                            h[k], th.score
                         ));
                     }
                 }

@@ -1,7 +1,13 @@
 //! The filter: random call sequences (the body-frame steps, the vector observation and the
 //! world-frame steps `bingham_filter_predict_world` / `_update_world` /
 //! `_log_likelihood_world`, whose `u = NULL` is the identity, not an error; the surprise
-//! `bingham_filter_surprise`, finite and ≥ 0 on success).
+//! `bingham_filter_surprise`, finite and ≥ 0 on success; the gated update
+//! `bingham_filter_update_gated`, with any `max_surprise` (0, χ² levels, huge, +Inf = no gate;
+//! NaN, −Inf and negative ones refused), its `surprise` output sometimes aliasing an input (valid
+//! in-place use): on success `accepted` is 1 exactly when the surprise, which equals
+//! `bingham_filter_surprise` on the twin, is at most `max_surprise`, a gated-out call leaves the
+//! state unchanged, and the twin, given `bingham_filter_update` only when accepted, stays
+//! bit-identical).
 //!
 //! One case is one sequence: a filter (created with random, sometimes hostile, parameters) and a
 //! "twin" created alike that receives only the calls that succeeded on the first. After every call:
@@ -28,6 +34,9 @@ use crate::status::{check_error_message, last_error, prime_last_error, status_na
 fn handle_sentinel() -> *mut bingham_filter {
     0xDEAD_BEE0usize as *mut bingham_filter
 }
+
+/// The fill of `bingham_filter_update_gated`'s `accepted` output (and the word after it).
+const ACCEPTED_SENTINEL: i32 = 0x5A5A_5A5A;
 
 pub(crate) fn filter_state(f: *const bingham_filter, d: usize) -> (Vec<f64>, Vec<f64>) {
     let mut m = vec![0.0; d * d];
@@ -113,6 +122,8 @@ enum FAttack {
     NonFinite(usize),
     /// finite but not acceptable (e.g. non-unit, non-orthogonal) or extreme
     Bad(usize),
+    /// the (single double) output written into the first entry of input i: a valid call
+    Alias(usize),
 }
 
 struct FArgs {
@@ -169,7 +180,8 @@ fn spoil_filter_args(rng: &mut Rng64, a: &mut FArgs, d: usize) {
 }
 
 /// Calls one filter function on `f` with the arrays of `a` (as the attack says), sets
-/// `out_*` where the function has outputs; returns the status.
+/// `out_*` where the function has outputs; returns the status. With an alias attack the output
+/// is written into an input buffer and, on success, copied from there into `outs[0]`.
 ///
 /// # Safety
 /// `f` is a live handle of dimension `d`; array lengths match the function.
@@ -180,6 +192,7 @@ unsafe fn filter_call(
     outs: &mut [Buf],
     out_ptr: &mut [*mut bingham_filter; 1],
     out_dim: &mut [usize; 2],
+    out_acc: &mut [i32; 2],
 ) -> bingham_status {
     let mut bufs: Vec<Buf> = a.arrays.iter().map(|v| Buf::from(v)).collect();
     let mut p: Vec<*const f64> = bufs.iter_mut().map(|b| b.ptr() as *const f64).collect();
@@ -195,6 +208,7 @@ unsafe fn filter_call(
         FAttack::Misaligned(i) if i - n_in < op_out.len() => {
             op_out[i - n_in] = outs[i - n_in].misaligned(3)
         }
+        FAttack::Alias(i) => op_out[0] = bufs[i].ptr(),
         _ => {}
     }
     let o = |i: usize| op_out.get(i).copied().unwrap_or(std::ptr::null_mut());
@@ -213,6 +227,18 @@ unsafe fn filter_call(
             13 => bingham_filter_update_world(fp, p[0], p[1], p[2]),
             14 => bingham_filter_log_likelihood_world(fp, p[0], p[1], p[2], o(0)),
             15 => bingham_filter_surprise(fp, p[0], p[1], p[2], o(0)),
+            16 => {
+                // `accepted` is the argument after `surprise`
+                let acc = out_acc.as_mut_ptr();
+                let ap = match a.attack {
+                    FAttack::Null(i) if i == n_in + 1 => std::ptr::null_mut(),
+                    FAttack::Misaligned(i) if i == n_in + 1 => {
+                        acc.cast::<u8>().wrapping_add(1).cast()
+                    }
+                    _ => acc,
+                };
+                bingham_filter_update_gated(fp, p[0], p[1], p[2], a.arrays[3][0], o(0), ap)
+            }
             5 => bingham_filter_get_state(fp, o(0), o(1)),
             6 => bingham_filter_mode(fp, o(0)),
             7 => {
@@ -238,20 +264,29 @@ unsafe fn filter_call(
             _ => unreachable!(),
         }
     };
+    let aliased = match a.attack {
+        FAttack::Alias(i) if st == BINGHAM_OK => Some(i),
+        _ => None,
+    };
     for (i, b) in bufs.iter().enumerate() {
         assert!(
             b.values()
                 .iter()
                 .zip(&a.arrays[i])
-                .all(|(x, y)| x.to_bits() == y.to_bits())
+                .enumerate()
+                .all(|(j, (x, y))| x.to_bits() == y.to_bits() || (aliased == Some(i) && j == 0))
                 && b.guards_ok(),
             "filter op {op}: input {i} was modified"
         );
     }
+    if let Some(i) = aliased {
+        // SAFETY: outs[0] holds one double.
+        unsafe { outs[0].ptr().write(bufs[i].values()[0]) };
+    }
     st
 }
 
-const FILTER_OPS: [&str; 16] = [
+const FILTER_OPS: [&str; 17] = [
     "bingham_filter_predict",
     "bingham_filter_predict_rotation",
     "bingham_filter_update",
@@ -268,6 +303,7 @@ const FILTER_OPS: [&str; 16] = [
     "bingham_filter_update_world",
     "bingham_filter_log_likelihood_world",
     "bingham_filter_surprise",
+    "bingham_filter_update_gated",
 ];
 
 /// The operations that must not change the state (const handle, or outputs only).
@@ -277,7 +313,17 @@ fn read_only(op: usize) -> bool {
 
 /// The operations with output arrays or pointer outputs (which the harness may make NULL).
 fn has_outputs(op: usize) -> bool {
-    matches!(op, 4..=8 | 10 | 11 | 14 | 15)
+    matches!(op, 4..=8 | 10 | 11 | 14..=16)
+}
+
+/// A `max_surprise` for `bingham_filter_update_gated`: 0, the χ² tail levels, random, huge, or
+/// +Inf (no gate).
+fn max_surprise(rng: &mut Rng64) -> f64 {
+    match rng.below(8) {
+        0 => *rng.pick(&[0.0, -0.0, 5e-324, f64::MAX, f64::INFINITY]),
+        1 | 2 => *rng.pick(&[1.0, 3.0, 10.83, 16.27]),
+        _ => rng.log_uniform(-3.0, 4.0),
+    }
 }
 
 /// `bingham_filter_predict_world` with `u = NULL`: the identity control, a valid call.
@@ -447,7 +493,7 @@ fn filter_sequence(
     let steps = 1 + rng.below(40);
     let mut result = Ok(());
     for step in 0..steps {
-        let op = match rng.below(32) {
+        let op = match rng.below(34) {
             0..=5 => 0,
             6..=7 => 1,
             8..=13 => 2,
@@ -462,6 +508,7 @@ fn filter_sequence(
             27..=28 => 13,
             29 => 14,
             31 => 15,
+            32..=33 => 16,
             _ => {
                 if rng.chance(0.5) {
                     7
@@ -496,6 +543,17 @@ fn filter_sequence(
                 attack: FAttack::None,
                 desc: String::new(),
             },
+            16 => FArgs {
+                arrays: vec![
+                    filter_measurement(&mut rng, &sm, d),
+                    noise.0,
+                    noise.1,
+                    vec![max_surprise(&mut rng)],
+                ],
+                kinds: vec![U, M, Z, One],
+                attack: FAttack::None,
+                desc: String::new(),
+            },
             3 => FArgs {
                 arrays: vec![orthogonal(&mut rng, d), z_vector(&mut rng, d)],
                 kinds: vec![M, Z],
@@ -525,18 +583,32 @@ fn filter_sequence(
             },
         };
         spoil_filter_args(&mut rng, &mut a, d);
+        if op == 16 {
+            // max_surprise: +Inf (no gate), ±0 and positive values are valid
+            if let FAttack::NonFinite(3) | FAttack::Bad(3) = a.attack {
+                let v = a.arrays[3][0];
+                if v == f64::INFINITY || v >= 0.0 {
+                    a.attack = FAttack::None;
+                }
+                a.desc = format!("{} max_surprise {v:e}", a.desc);
+            }
+            if a.attack == FAttack::None && rng.chance(0.1) {
+                // `surprise` written over the first entry of the measurement or the noise
+                a.attack = FAttack::Alias(rng.below(3));
+            }
+        }
         if op == 12 && a.attack == FAttack::None && rng.chance(0.25) {
             // no control: u = NULL
             a.attack = FAttack::Null(0);
         }
         // outputs: array outputs count as argument indices after the inputs
         let out_kinds: &[Kind] = match op {
-            4 | 10 | 14 | 15 => &[One],
+            4 | 10 | 14..=16 => &[One],
             5 => &[DD, D],
             6 | 11 => &[D],
             _ => &[],
         };
-        let n_args = a.arrays.len() + out_kinds.len() + usize::from(op == 7 || op == 8);
+        let n_args = a.arrays.len() + out_kinds.len() + usize::from(op == 7 || op == 8 || op == 16);
         if matches!(a.attack, FAttack::None) && has_outputs(op) && rng.chance(0.25) {
             let i = a.arrays.len() + rng.below(n_args - a.arrays.len());
             a.attack = if rng.chance(0.5) {
@@ -558,6 +630,7 @@ fn filter_sequence(
             .collect();
         let mut out_ptr = [handle_sentinel()];
         let mut out_dim = [usize::MAX; 2];
+        let mut out_acc = [ACCEPTED_SENTINEL; 2];
         let before = state_bits(f, d);
         prime_last_error(name);
         if verbose {
@@ -567,7 +640,17 @@ fn filter_sequence(
             );
         }
         // SAFETY: f is live with dimension d; arrays have the lengths for d.
-        let st = unsafe { filter_call(op, f, &a, &mut outs, &mut out_ptr, &mut out_dim) };
+        let st = unsafe {
+            filter_call(
+                op,
+                f,
+                &a,
+                &mut outs,
+                &mut out_ptr,
+                &mut out_dim,
+                &mut out_acc,
+            )
+        };
         calls += 1;
         count(stats, name, st);
         if verbose {
@@ -590,6 +673,8 @@ fn filter_sequence(
             | FAttack::Null(_)
             | FAttack::Misaligned(_) => Some(BINGHAM_ERR_NULL_ARGUMENT),
             FAttack::NonFinite(_) => Some(BINGHAM_ERR_INVALID_ARGUMENT),
+            // a negative max_surprise (the valid ones were made attack-free above)
+            FAttack::Bad(3) if op == 16 => Some(BINGHAM_ERR_INVALID_ARGUMENT),
             _ => None,
         };
         if let Some(w) = want {
@@ -614,6 +699,7 @@ fn filter_sequence(
             if outs.iter().any(|b| !b.untouched())
                 || out_ptr[0] != handle_sentinel()
                 || out_dim != [usize::MAX; 2]
+                || out_acc != [ACCEPTED_SENTINEL; 2]
             {
                 result = fail(format!(
                     "failed with {} but wrote an output",
@@ -636,7 +722,9 @@ fn filter_sequence(
                 }
                 continue;
             }
-            if (matches!(a.attack, FAttack::None) || null_is_identity(op, &a.attack)) && op != 3 {
+            let valid = matches!(a.attack, FAttack::None | FAttack::Alias(_))
+                || null_is_identity(op, &a.attack);
+            if valid && op != 3 {
                 // valid arguments: the documented failures are NOT_CONVERGED / NUMERICAL only
                 if st != BINGHAM_ERR_NOT_CONVERGED && st != BINGHAM_ERR_NUMERICAL {
                     result = fail(format!("valid arguments refused: {}", last_error()));
@@ -674,6 +762,50 @@ fn filter_sequence(
                 let v = outs[0].values()[0];
                 if !v.is_finite() || v < 0.0 || !outs[0].guards_ok() {
                     result = fail(format!("surprise {v}"));
+                    break;
+                }
+            }
+            16 => {
+                let (s, max_s) = (outs[0].values()[0], a.arrays[3][0]);
+                if !s.is_finite() || s < 0.0 || !outs[0].guards_ok() {
+                    result = fail(format!("surprise {s}"));
+                    break;
+                }
+                if out_acc[1] != ACCEPTED_SENTINEL || out_acc[0] != i32::from(s <= max_s) {
+                    result = fail(format!(
+                        "accepted {out_acc:?} with surprise {s:e}, max_surprise {max_s:e}"
+                    ));
+                    break;
+                }
+                if out_acc[0] == 0 && after != before {
+                    result = fail("gated out, but the state changed".into());
+                    break;
+                }
+                if out_acc[0] == 0 {
+                    *stats.entry("update_gated:OK gated out".into()).or_default() += 1;
+                }
+                // the twin, still in the state before the call: the same surprise, and the plain
+                // update gives the same state when the measurement was accepted
+                let [y, mv, zv] = [0, 1, 2].map(|i| a.arrays[i].as_ptr());
+                let mut s2 = [f64::NAN];
+                // SAFETY: twin is live with dimension d; arrays of the lengths for d.
+                let st2 = unsafe { bingham_filter_surprise(twin, y, mv, zv, s2.as_mut_ptr()) };
+                if st2 != BINGHAM_OK || s2[0].to_bits() != s.to_bits() {
+                    result = fail(format!(
+                        "surprise {s:e}, but bingham_filter_surprise gives {:e} ({})",
+                        s2[0],
+                        status_name(st2)
+                    ));
+                    break;
+                }
+                // SAFETY: as above.
+                if out_acc[0] == 1
+                    && unsafe { bingham_filter_update(twin, y, mv, zv) } != BINGHAM_OK
+                {
+                    result = fail(format!(
+                        "accepted, but bingham_filter_update fails: {}",
+                        last_error()
+                    ));
                     break;
                 }
             }
@@ -740,12 +872,15 @@ fn filter_sequence(
             _ => {}
         }
         // the twin repeats the successful call (same arguments); states must agree bit for bit
-        if !read_only(op) {
+        // (the gated update's twin was given the plain update above)
+        if !read_only(op) && op != 16 {
             let mut twin_outs: Vec<Buf> = vec![];
             let mut tp = [handle_sentinel()];
             let mut td = [usize::MAX; 2];
+            let mut ta = [ACCEPTED_SENTINEL; 2];
             // SAFETY: twin is live with dimension d.
-            let st2 = unsafe { filter_call(op, twin, &a, &mut twin_outs, &mut tp, &mut td) };
+            let st2 =
+                unsafe { filter_call(op, twin, &a, &mut twin_outs, &mut tp, &mut td, &mut ta) };
             if st2 != BINGHAM_OK {
                 result = fail(format!("twin failed: {}", last_error()));
                 break;

@@ -1,4 +1,5 @@
-//! The small helpers: `bingham_status_str` and `bingham_last_error_message`.
+//! The small helpers: `bingham_status_str`, `bingham_last_error_message` and `bingham_version`
+//! (the crate's version, the same static string at every call, the last error left alone).
 
 use bingham::ffi::bingham_status::*;
 use bingham::ffi::*;
@@ -15,6 +16,8 @@ fn fuzz_status_str_and_last_error_message() {
         return; // reproducing a case of another test
     }
     let slot = CaseSlot::new("helpers");
+    let version = bingham_version();
+    assert!(!version.is_null(), "bingham_version returned NULL");
     let known: Vec<String> = (0..=7)
         .map(|c| {
             // SAFETY: any int is accepted; the result is a static C string.
@@ -72,6 +75,13 @@ fn fuzz_status_str_and_last_error_message() {
         assert_eq!(st, BINGHAM_ERR_INVALID_ARGUMENT);
         let full = last_error();
         assert!(full.contains(&format!("row {bad}")), "{full}");
+        // bingham_version between a failure and the reading of its message
+        let v = bingham_version();
+        assert_eq!(v, version, "bingham_version: not the same static string");
+        // SAFETY: NUL-terminated static string.
+        let text = unsafe { std::ffi::CStr::from_ptr(v) }.to_str();
+        assert_eq!(text, Ok(env!("CARGO_PKG_VERSION")), "bingham_version");
+        assert_eq!(last_error(), full, "bingham_version changed the last error");
         let len = match rng.below(4) {
             0 => 0,
             1 => rng.below(full.len() + 3),

@@ -8,8 +8,8 @@
 //! BINGHAM_ERR_CALLBACK after exactly k + 1 calls, with the state (and, through the twin, the hidden
 //! state) unchanged; invalid arguments are refused before the first call; the callbacks always see
 //! a unit vector, a NaN-filled output and their own user pointer. Half the steps go through the
-//! `_opts` forms with random tolerances and budgets (from 1 call) and now and then an invalid
-//! option: never more calls than the budget, a report written only on success and consistent with
+//! `_opts` forms with random tolerances and budgets (from 1 call) or the defaults of
+//! `bingham_nonlinear_options_default`, and now and then an invalid option: never more calls than the budget, a report written only on success and consistent with
 //! the calls counted and the tolerance, invalid options refused before any call.
 
 use std::collections::BTreeMap;
@@ -410,6 +410,18 @@ fn nonlinear_sequence(
                 20_000
             },
         };
+        if use_opts && rng.chance(0.25) {
+            // the library's defaults, as a caller starts from them
+            // SAFETY: a writable bingham_nonlinear_options.
+            let st = unsafe { bingham_nonlinear_options_default(&mut opts) };
+            if st != BINGHAM_OK {
+                result = Err(format!(
+                    "step {step}: bingham_nonlinear_options_default: {}",
+                    last_error()
+                ));
+                break;
+            }
+        }
         let bad_opts = use_opts && fault == NlFault::None && rng.chance(0.15);
         if bad_opts {
             match rng.below(3) {
