@@ -12,7 +12,7 @@
 //! 7. `ffi` (the C ABI)
 //!
 //! It also checks that `unsafe` appears only in `src/ffi/` and in the one module that calls the
-//! SIMD kernels compiled for run-time detected CPU features (`normalization/quad/simd.rs`).
+//! SIMD kernels compiled for run-time detected CPU features (`normalization/quadrature/simd.rs`).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
@@ -36,7 +36,7 @@ const LAYERS: &[(&str, u32)] = &[
 ];
 
 /// The files allowed to contain `unsafe` (relative to `src/`).
-const UNSAFE_HOMES: &[&str] = &["ffi/", "normalization/quad/simd.rs"];
+const UNSAFE_HOMES: &[&str] = &["ffi/", "normalization/quadrature/simd.rs"];
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     for e in fs::read_dir(dir).expect("readable src/") {
@@ -195,7 +195,7 @@ fn unsafe_lives_in_the_ffi_and_the_simd_dispatch() {
     }
     assert!(
         wrong.is_empty(),
-        "`unsafe` outside src/ffi/ and normalization/quad/simd.rs:\n{}",
+        "`unsafe` outside src/ffi/ and normalization/quadrature/simd.rs:\n{}",
         wrong.join("\n")
     );
 }
@@ -207,6 +207,9 @@ fn the_checker_sees_paths_and_skips_comments() {
     );
     let want: BTreeSet<String> = ["linalg", "error"].iter().map(|s| s.to_string()).collect();
     assert_eq!(found, want);
-    assert_eq!(module_of("normalization/quad/simd.rs"), "normalization");
+    assert_eq!(
+        module_of("normalization/quadrature/simd.rs"),
+        "normalization"
+    );
     assert_eq!(module_of("ahrs.rs"), "ahrs");
 }

@@ -15,8 +15,8 @@
 
 use nalgebra::Const;
 
-use super::core::{log_joint_normalizer, Core};
 use super::noise::Role;
+use super::state::{log_joint_normalizer, Core};
 use super::Vect;
 use crate::canonical::unit;
 use crate::error::{Error, Result};

@@ -22,7 +22,7 @@
 //!
 //! # Memory and concentration limits
 //!
-//! The state lives on the stack (`d = 2, 4`, fixed-size nalgebra types, the `Core` in `core`):
+//! The state lives on the stack (`d = 2, 4`, fixed-size nalgebra types, the `Core` in `state`):
 //! after the first step with a given noise a predict or update performs **no heap allocation**;
 //! noises are validated and prepared once and cached on their parameters' bit patterns
 //! (`noise`); the moment matching is warm-started from the previous prediction. Updates stay
@@ -33,7 +33,6 @@
 //! `docs/speed.md`.
 
 mod control_variate;
-mod core;
 mod gate;
 mod noise;
 mod nonlinear;
@@ -41,6 +40,7 @@ mod nonlinear_options;
 mod rqmc;
 mod sampled;
 mod spin;
+mod state;
 mod world;
 
 use nalgebra::{Matrix4, SMatrix, SVector};
@@ -48,7 +48,6 @@ use nalgebra::{Matrix4, SMatrix, SVector};
 use crate::distribution::Bingham;
 use crate::error::{Error, Result};
 
-pub(crate) use self::core::Core;
 pub use gate::Gated;
 pub(crate) use noise::Noise;
 pub use nonlinear::{
@@ -59,6 +58,7 @@ pub use nonlinear_options::{
     DEFAULT_PREDICT_TOLERANCE, DEFAULT_UPDATE_TOLERANCE,
 };
 pub use spin::SpinFilter;
+pub(crate) use state::Core;
 
 /// A `D×D` matrix on the stack.
 type Mat<const D: usize> = SMatrix<f64, D, D>;

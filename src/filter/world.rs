@@ -15,8 +15,8 @@
 
 use nalgebra::Const;
 
-use super::core::{composed_moment, Core};
 use super::noise::Role;
+use super::state::{composed_moment, Core};
 use super::{Mat, Vect};
 use crate::canonical::unit;
 use crate::error::Result;

@@ -13,12 +13,12 @@
 //!
 //! Files: this one holds the public fitting API and the solution type ([`Derivs`]); `newton`
 //! the Newton iteration for d ≥ 3 with its starts; `asymptotic` the series of the moment map
-//! for concentrated Binghams that corrects its steps (d = 3, 4); `pair` the closed-form d = 2
+//! for concentrated Binghams that corrects its steps (d = 3, 4); `d2` the closed-form d = 2
 //! solver.
 
 mod asymptotic;
+mod d2;
 mod newton;
-mod pair;
 
 use nalgebra::allocator::Allocator;
 use nalgebra::{Const, DMatrix, DefaultAllocator, Dim, Dyn};

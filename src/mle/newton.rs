@@ -1,4 +1,4 @@
-//! The moment-matching Newton iteration (d ≥ 3; d = 2 is handed to `pair`) and its starting
+//! The moment-matching Newton iteration (d ≥ 3; d = 2 is handed to `d2`) and its starting
 //! points: [`solve_z`] on the solver's types, [`newton`] on slices, [`initial_guess`] for a
 //! cold start.
 
@@ -7,7 +7,7 @@ use nalgebra::DefaultAllocator;
 use nalgebra::Dim;
 
 use super::asymptotic;
-use super::pair::{newton_pair, pair_solve};
+use super::d2::{newton_pair, pair_solve};
 use super::{Derivs, MLE_TOL};
 use crate::error::{Error, Result, MAX_DIM};
 use crate::linalg::{cholesky_solve, zero_vector, zeros, Vector};

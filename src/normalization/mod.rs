@@ -9,9 +9,9 @@
 mod contour;
 pub(crate) mod d2;
 mod gauss;
-mod quad;
+mod quadrature;
 #[doc(hidden)]
-pub use quad::{log_f_sorted_fine, log_f_sorted_tuned};
+pub use quadrature::{log_f_sorted_fine, log_f_sorted_tuned};
 mod saddlepoint;
 
 use std::sync::OnceLock;
@@ -19,7 +19,7 @@ use std::sync::OnceLock;
 use crate::error::{check_dim, check_finite, Error, Result, MAX_DIM};
 
 /// The compiled kernel that evaluates the d = 3, 4 quadrature nodes (several at a time, see
-/// `quad/`). [`Path::detected`] picks the one every evaluation uses, once per process; the
+/// `quadrature/`). [`Path::detected`] picks the one every evaluation uses, once per process; the
 /// others exist for tests and benchmarks ([`log_f_with_path`]). All paths agree to rounding
 /// (they differ only in fused versus separate multiply-adds, `tests/dispatch.rs`); each is
 /// deterministic: the same input gives the same bits on every call and thread.
@@ -115,7 +115,7 @@ fn sorted_eval(
     match (method, z.len()) {
         (Method::Saddlepoint, _) => saddlepoint::log_f_sorted(z, grad, hess),
         (Method::Exact, 2) => d2::log_f_sorted(z, grad, hess),
-        (Method::Exact, 3 | 4) => quad::log_f_sorted_on(path, z, grad, hess),
+        (Method::Exact, 3 | 4) => quadrature::log_f_sorted_on(path, z, grad, hess),
         (Method::Exact, _) => contour::log_f_sorted(z, grad, hess),
     }
 }

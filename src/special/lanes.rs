@@ -1,7 +1,7 @@
 //! Lane-wise versions of the special functions: several arguments evaluated at once by the same
 //! sequence of operations, written as plain Rust over fixed-size arrays so that the compiler
 //! turns every step into SIMD instructions (the d = 3, 4 normalization-constant quadrature
-//! evaluates its nodes this way, see `normalization::quad`).
+//! evaluates its nodes this way, see `normalization::quadrature`).
 //!
 //! Every function here is `#[inline(always)]` and free of branches that differ between lanes:
 //! the piece of a Bessel fit is found per lane and its coefficients gathered, both the piece
