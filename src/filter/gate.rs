@@ -17,7 +17,7 @@ use nalgebra::Const;
 
 use super::noise::Role;
 use super::state::{log_joint_normalizer, Core};
-use super::Vect;
+use super::types::Vect;
 use crate::canonical::unit;
 use crate::error::{Error, Result};
 use crate::linalg::congruence;

@@ -32,44 +32,28 @@
 //! The nonlinear steps are in `nonlinear`. Derivations: `docs/design.md` (§ "Filter"); speed:
 //! `docs/speed.md`.
 
-mod control_variate;
 mod gate;
 mod noise;
 mod nonlinear;
-mod nonlinear_options;
-mod rqmc;
-mod sampled;
 mod spin;
 mod state;
+mod types;
 mod world;
 
-use nalgebra::{Matrix4, SMatrix, SVector};
+use nalgebra::Matrix4;
 
 use crate::distribution::Bingham;
 use crate::error::{Error, Result};
 
 pub use gate::Gated;
-pub(crate) use noise::Noise;
 pub use nonlinear::{
-    CORRECTION_PASSES, MAX_TEMPERING_STEPS, MIN_CORRECTION_SHARE, TEMPERING_RESIDUAL,
-};
-pub use nonlinear_options::{
-    NonlinearMethod, NonlinearOptions, NonlinearReport, DEFAULT_MAX_CALLS, DEFAULT_MODE_TOLERANCE,
-    DEFAULT_PREDICT_TOLERANCE, DEFAULT_UPDATE_TOLERANCE,
+    NonlinearMethod, NonlinearOptions, NonlinearReport, CORRECTION_PASSES, DEFAULT_MAX_CALLS,
+    DEFAULT_MODE_TOLERANCE, DEFAULT_PREDICT_TOLERANCE, DEFAULT_UPDATE_TOLERANCE,
+    MAX_TEMPERING_STEPS, MIN_CORRECTION_SHARE, TEMPERING_RESIDUAL,
 };
 pub use spin::SpinFilter;
 pub(crate) use state::Core;
-
-/// A `D×D` matrix on the stack.
-type Mat<const D: usize> = SMatrix<f64, D, D>;
-/// A vector of length `D` on the stack.
-type Vect<const D: usize> = SVector<f64, D>;
-
-/// The largest concentration `|z_i|` the prediction uses (see the module documentation,
-/// "Concentration limits"): before the moments of the state and of the process noise are
-/// formed, every `z_i < −MAX_CONCENTRATION` is replaced by `−MAX_CONCENTRATION`.
-/// `z = −1e10` corresponds to an angular standard deviation of about `1/√(2·1e10) ≈ 7 µrad`.
-pub const MAX_CONCENTRATION: f64 = 1e10;
+pub use types::MAX_CONCENTRATION;
 
 /// A recursive Bingham filter for `d = 2` (axes) or `d = 4` (unit quaternions).
 ///

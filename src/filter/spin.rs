@@ -26,8 +26,8 @@ use nalgebra::Const;
 
 use super::noise::{NoiseCache, Role};
 use super::state::{composed_moment, log_joint_normalizer};
+use super::types::{Mat, Vect, MAX_CONCENTRATION};
 use super::world::{conjugation, world_likelihood_m};
-use super::{Mat, Vect, MAX_CONCENTRATION};
 use crate::canonical::{params_row_major, unit};
 use crate::distribution::{bayes_product, log_f_omega, omega, Bingham};
 use crate::error::{Error, Result};

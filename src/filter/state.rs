@@ -4,8 +4,8 @@
 
 use nalgebra::Const;
 
-use super::noise::{capped, NoiseCache, Role};
-use super::{Mat, Noise, Vect};
+use super::noise::{capped, Noise, NoiseCache, Role};
+use super::types::{Mat, Vect};
 use crate::canonical::{params_row_major, unit};
 use crate::distribution::{bayes_product, log_f_omega, omega, product_eigen_precision};
 use crate::error::{Error, Result};

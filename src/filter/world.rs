@@ -17,7 +17,7 @@ use nalgebra::Const;
 
 use super::noise::Role;
 use super::state::{composed_moment, Core};
-use super::{Mat, Vect};
+use super::types::{Mat, Vect};
 use crate::canonical::unit;
 use crate::error::Result;
 use crate::linalg::congruence;

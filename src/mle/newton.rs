@@ -8,7 +8,7 @@ use nalgebra::Dim;
 
 use super::asymptotic;
 use super::d2::{newton_pair, pair_solve};
-use super::{Derivs, MLE_TOL};
+use super::solution::{Derivs, NewtonStart, MLE_TOL};
 use crate::error::{Error, Result, MAX_DIM};
 use crate::linalg::{cholesky_solve, zero_vector, zeros, Vector};
 use crate::normalization::{log_normalization_into, Method};
@@ -79,15 +79,6 @@ impl Scratch {
             &mut self.big[..]
         }
     }
-}
-
-/// Where [`newton`] starts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum NewtonStart {
-    /// From [`initial_guess`].
-    Guess,
-    /// From the point in `z` whose gradient and Hessian are already in `grad` and `hess`.
-    Evaluated,
 }
 
 /// The MLE's Newton iteration, allocation-free for d ≤ 4. Solves `ω(z) = target` (ascending,

@@ -18,8 +18,8 @@
 
 #![allow(clippy::needless_range_loop)] // small dense sums over parallel arrays
 
-use super::{Mat, Vect};
 use crate::error::{Error, Result};
+use crate::filter::types::{Mat, Vect};
 
 /// Independent randomizations of the point set (the error estimate's degrees of freedom + 1).
 pub(crate) const REPLICATES: usize = 16;

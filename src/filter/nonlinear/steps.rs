@@ -2,17 +2,18 @@
 //! of the state, and the update with a log-likelihood callback by progressive (tempered)
 //! linearization and importance correction (see [`super::BinghamFilter::update_nonlinear`]).
 
-use super::noise::{capped, Role};
-use super::nonlinear_options::{
+use super::options::{
     NonlinearMethod, NonlinearOptions, NonlinearReport, DEFAULT_PREDICT_TOLERANCE,
 };
-use super::{Core, Mat, Vect, MAX_CONCENTRATION};
 use crate::canonical::UNIT_TOL;
 use crate::deterministic::{
     for_each_point, for_each_principal, for_each_probe, plan, Reproduced, Scheme,
 };
 use crate::distribution::bayes_product;
 use crate::error::{Error, Result};
+use crate::filter::noise::{capped, Role};
+use crate::filter::state::Core;
+use crate::filter::types::{Mat, Vect, MAX_CONCENTRATION};
 use crate::linalg::cholesky_solve;
 use crate::linalg::congruence;
 use crate::mle::fit_second_moment;
@@ -203,7 +204,7 @@ impl<const D: usize> Core<D> {
         Ok(())
     }
 
-    pub(super) fn predict_nonlinear<F>(
+    pub(in crate::filter) fn predict_nonlinear<F>(
         &mut self,
         a: &mut F,
         m_w: &[f64],
@@ -492,7 +493,7 @@ impl<const D: usize> Core<D> {
 
     /// The nonlinear update with its error controlled by `opts` (see
     /// [`super::BinghamFilter::update_nonlinear_opts`]); the state changes only on success.
-    pub(super) fn update_nonlinear<L>(
+    pub(in crate::filter) fn update_nonlinear<L>(
         &mut self,
         log_l: &mut L,
         opts: &NonlinearOptions,
