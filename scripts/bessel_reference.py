@@ -88,7 +88,7 @@ def f_q(x):
 
 # ---------------------------------------------------------------- piecewise fits
 def pieces():
-    """(a, b, c): the pieces of [0, X_ASY) and their midpoints (src/special/mod.rs: `piece_index`)."""
+    """(a, b, c): the pieces of [0, X_ASY) and their midpoints (src/special/pieces.rs: `piece_index`)."""
     out = []
     for k in range(8 * PIECES_PER_UNIT):  # [0, 8)
         a, b = k / PIECES_PER_UNIT, (k + 1) / PIECES_PER_UNIT

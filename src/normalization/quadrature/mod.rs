@@ -15,8 +15,9 @@
 //! Contract: for every finite sorted `z` with `z_d = 0`, `log F` and every `ω_i` to near machine
 //! precision (down to `ω_i ≈ 1/(2|z_i|)` at |z| = 1e300); the Hessian less accurately (a
 //! covariance of nearly independent coordinates cancels digits; it only steers the MLE). How: the halves `u ∈ [0, ½]`, `[½, 1]` in `√u`, `√(1−u)`, graded 20-point
-//! Gauss–Legendre panels (`LAYOUT`), power-of-two scalings per group and half (`Scaling`), the
-//! kernel (`kernel`) compiled per CPU path (`simd`, the crate's only `unsafe` outside the FFI).
+//! Gauss–Legendre panels (`LAYOUT`, in `rule`), power-of-two scalings per group and half
+//! (`Scaling`, in `groups`), the kernel (`kernel`) compiled per CPU path (`simd`, the crate's
+//! only `unsafe` outside the FFI), the path chosen at run time (`Path`, in `kernel_path`).
 //! Derivation and numerics: `docs/design.md` (§ "Numerical notes": d = 3, 4 quadrature, kernel
 //! paths, range); measured accuracy `docs/accuracy.md`, speed `docs/speed.md`.
 
