@@ -1,5 +1,5 @@
 //! Randomized quasi-Monte Carlo (RQMC) integration against a Bingham distribution: the error
-//! estimate and the refinement of the nonlinear steps ([`super::nonlinear`]).
+//! estimate and the refinement of the nonlinear steps ([`super::sampled`]).
 //!
 //! Points: the first `n` points of a Sobol sequence (32-bit, Gray-code order, Joe & Kuo's
 //! direction numbers for the first three dimensions), in [`REPLICATES`] copies, each XORed with

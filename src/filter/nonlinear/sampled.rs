@@ -12,7 +12,8 @@
 //! - **Prediction**: the second moment of `a(x)` under the state by importance sampling from the
 //!   state's envelope.
 //!
-//! In both, the points per replicate double until `3 × standard error ≤ tolerance`.
+//! In both, the points per replicate double until `3 × standard error ≤ tolerance`. The method
+//! with its derivation: `docs/design.md`, section "Nonlinear steps".
 
 use super::control_variate::{Features, PooledSums, ReplicateSums, MAX_FEATURES};
 use super::options::{
