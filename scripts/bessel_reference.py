@@ -50,6 +50,7 @@ ROOT = Path(__file__).resolve().parent.parent
 CSV_PATH = ROOT / "tests" / "data" / "bessel_reference.csv"
 
 # Number of coefficients of the divided-difference polynomial g (degree NT - 1; f has degree NT).
+# The Rust side defines the same NT in src/special/pieces.rs (the tables are typed with it).
 NT = 10
 # Pieces: width 1 / PIECES_PER_UNIT on [0, 8), PIECES_PER_OCTAVE per octave on [8, X_ASY).
 PIECES_PER_UNIT = 4
@@ -87,7 +88,7 @@ def f_q(x):
 
 # ---------------------------------------------------------------- piecewise fits
 def pieces():
-    """(a, b, c): the pieces of [0, X_ASY) and their midpoints (src/special/mod.rs: `piece_index`)."""
+    """(a, b, c): the pieces of [0, X_ASY) and their midpoints (src/special/pieces.rs: `piece_index`)."""
     out = []
     for k in range(8 * PIECES_PER_UNIT):  # [0, 8)
         a, b = k / PIECES_PER_UNIT, (k + 1) / PIECES_PER_UNIT
@@ -264,8 +265,6 @@ def generate():
           f"i0e-i1e {float(w[1]):.2e}, Q {float(w[2]):.2e}", file=sys.stderr)
     out += [
         "",
-        "/// Number of coefficients of each piece's divided-difference polynomial.",
-        f"const NT: usize = {NT};",
         "/// Start of the asymptotic series.",
         f"const X_ASY: f64 = {rust_f64(X_ASY)};",
         "",
@@ -330,7 +329,7 @@ def tables_file(block):
         "// do not edit by hand.",
         "//! Coefficient tables of the Bessel fits in `special` (see that module's documentation).",
         "",
-        "use super::{Piece, Poly};",
+        "use super::pieces::{Piece, Poly, NT};",
         "",
     ]
     return "\n".join(head + lines).rstrip("\n") + "\n"

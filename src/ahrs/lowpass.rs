@@ -1,8 +1,8 @@
 //! The AHRS's filter coefficients and the second-order low-pass filter of a vector fixed in
 //! the quasi-inertial frame (turned with every gyroscope increment).
 
+use super::params::AhrsParams;
 use super::vec3::scale3;
-use super::AhrsParams;
 use crate::quaternion::q4;
 
 /// First-order low-pass coefficient for time constant `tau` at period `dt`.
@@ -24,6 +24,10 @@ pub(super) const REST_NOISE_TIME: f64 = 0.02;
 
 /// Time constant (s) with which a disturbed field's candidate reference follows it.
 pub(super) const CANDIDATE_TIME: f64 = 1.0;
+
+/// Time constant (s) of the low-pass filter of the norm and dip the magnetic disturbance test
+/// sees (module `magnetic`).
+pub(super) const MAG_TEST_TIME: f64 = 0.015;
 
 /// The filter coefficients that follow from the parameters (computed once).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,7 +69,7 @@ impl Coeffs {
             rest_noise: lp_coeff(dt, REST_NOISE_TIME),
             mag_ref: lp_coeff(dt, p.mag_ref_time),
             candidate: lp_coeff(dt, CANDIDATE_TIME),
-            mag_test: lp_coeff(dt, super::magnetic::TEST_TIME),
+            mag_test: lp_coeff(dt, MAG_TEST_TIME),
             acc: butterworth(dt, p.acc_tau),
             mag: butterworth(dt, p.mag_tau),
             acc_warmup: warmup(dt, p.acc_tau),

@@ -1,10 +1,11 @@
 //! The magnetic reference (the field's norm and dip), the disturbance decided per phase, the
 //! field averaged in the world frame of the estimate, and the heading observation it gives.
 //!
-//! - **Per phase, with hysteresis.** A field whose norm (low-passed over [`TEST_TIME`], so that
-//!   the sensor's noise does not trip the test at high sample rates) differs from the
-//!   reference by more than `mag_norm_tol` (relative) or whose dip differs by more than
-//!   `mag_dip_tol` starts a disturbed phase; the phase ends only after [`RECOVER_TIME`] of samples that all pass. A
+//! - **Per phase, with hysteresis.** A field whose norm (low-passed over
+//!   [`MAG_TEST_TIME`](super::lowpass::MAG_TEST_TIME), so that the sensor's noise does not trip
+//!   the test at high sample rates) differs from the reference by more than `mag_norm_tol`
+//!   (relative) or whose dip differs by more than `mag_dip_tol` starts a disturbed phase; the
+//!   phase ends only after [`RECOVER_TIME`] of samples that all pass. A
 //!   field that passes the test now and then near a magnet is not representative of the
 //!   undisturbed one (the samples that pass are a biased subset), so nothing of a disturbed
 //!   phase is used; the average continues after it from where it was (it lives in the world
@@ -26,16 +27,13 @@
 use nalgebra::Matrix4;
 
 use super::lowpass::{Coeffs, InertialLowPass};
+use super::params::AhrsParams;
 use super::vec3::{dot3, norm3};
-use super::AhrsParams;
 use crate::quaternion::q4;
 
 /// Time (s) a field must pass the disturbance test without interruption to end a disturbed
 /// phase (VQF uses the same half second).
 pub(super) const RECOVER_TIME: f64 = 0.5;
-
-/// Time constant (s) of the low-pass filter of the norm and dip the disturbance test sees.
-pub(super) const TEST_TIME: f64 = 0.015;
 
 /// Rotation rate (rad/s, 20°/s) above which a steady disturbance counts toward a new reference.
 pub(super) const NEW_REF_RATE: f64 = 0.35;
@@ -50,7 +48,7 @@ pub(super) struct Magnetic {
     /// The candidate for a new reference, and the seconds of rotation it has held.
     cand: (f64, f64),
     cand_time: f64,
-    /// The sample's norm and dip, low-passed over [`TEST_TIME`] (what the test sees).
+    /// The sample's norm and dip, low-passed over [`MAG_TEST_TIME`](super::lowpass::MAG_TEST_TIME) (what the test sees).
     tested: Option<(f64, f64)>,
     /// Whether the current phase is disturbed, and how long the test has passed since.
     disturbed: bool,
@@ -106,7 +104,7 @@ impl Magnetic {
     ) -> bool {
         let up_b = q4::rotate_inverse(q, &UP);
         let (raw_norm, raw_dip) = norm_dip(m, &up_b);
-        // the test sees norm and dip low-passed over TEST_TIME, so that the sensor's noise
+        // the test sees norm and dip low-passed over MAG_TEST_TIME, so that the sensor's noise
         // does not fail it now and then at high sample rates (both are rotation-invariant)
         let (norm, dip) = match self.tested {
             Some((n, d)) => (

@@ -133,7 +133,9 @@ pub struct Ahrs {
     params: AhrsParams,
     coeffs: Coeffs,
     filter: Option<BinghamFilter>,
-    s: SampleState,
+    /// What a sample changes besides the Bingham state: the bias, the low-pass filters, the
+    /// rest and magnetic tests, the health readout (committed at the end of the sample).
+    sample_state: SampleState,
     /// The online estimate of the magnetometer's latency (a readout; not used by the filter).
     latency: LatencyEstimator,
     samples: u64,
@@ -149,7 +151,7 @@ impl Ahrs {
             params: *params,
             coeffs,
             filter: None,
-            s: SampleState {
+            sample_state: SampleState {
                 bias: BiasState::new(params.bias_std),
                 gyr_lp: [0.0; 3],
                 acc_lp: [0.0; 3],
@@ -189,7 +191,7 @@ impl Ahrs {
     pub fn quaternion(&self) -> [f64; 4] {
         match &self.filter {
             Some(f) => {
-                let q = f.core4().map_or([1.0, 0.0, 0.0, 0.0], |c| c.mode4());
+                let q = f.core4().map_or([1.0, 0.0, 0.0, 0.0], |c| c.mode());
                 if q[0] < 0.0 {
                     [-q[0], -q[1], -q[2], -q[3]]
                 } else {
@@ -236,14 +238,14 @@ impl Ahrs {
     /// is then unchanged.
     pub fn set_state(&mut self, m: &[f64], z: &[f64]) -> Result<()> {
         let mut f = BinghamFilter::new(4, m, z)?;
-        let omega = f.core4_mut()?.omega4()?;
+        let omega = f.core4_mut()?.omega()?;
         if let Some(old) = self.filter.as_mut() {
             old.set_state(m, z)?;
         } else {
             self.filter = Some(f);
         }
-        self.s.omega = [omega[0], omega[1], omega[2], omega[3]];
-        self.s.bias.pending = Matrix3::zeros();
+        self.sample_state.omega = [omega[0], omega[1], omega[2], omega[3]];
+        self.sample_state.bias.pending = Matrix3::zeros();
         Ok(())
     }
 
@@ -264,12 +266,12 @@ impl Ahrs {
             crate::observation::spread_from_omega(&[0.25; 4], out);
             return Ok(());
         };
-        crate::observation::spread_from_omega(&self.s.omega, out);
-        let n = &self.s.bias.pending;
+        crate::observation::spread_from_omega(&self.sample_state.omega, out);
+        let n = &self.sample_state.bias.pending;
         if n.trace() > 0.0 {
             let core = f.core4()?;
-            let (m, _) = core.params4();
-            let q = core.mode4();
+            let (m, _) = core.params();
+            let q = core.mode();
             let qc = q4::conj(&q);
             let mut total = out[3] * out[3];
             for (i, o) in out.iter_mut().take(3).enumerate() {
@@ -289,12 +291,14 @@ impl Ahrs {
     /// over the last [`HEALTH_TIME`] seconds; `score` above [`HEALTH_THRESHOLD`] flags an
     /// input mistake (units, period, axes). All zero before the first correction.
     pub fn health(&self) -> AhrsHealth {
-        self.s.health.readout(self.s.mag.reference_dip())
+        self.sample_state
+            .health
+            .readout(self.sample_state.mag.reference_dip())
     }
 
     /// The gyroscope bias estimate (rad/s, sensor frame).
     pub fn gyro_bias(&self) -> [f64; 3] {
-        let b = &self.s.bias.b;
+        let b = &self.sample_state.bias.b;
         [b[0], b[1], b[2]]
     }
 
@@ -303,7 +307,7 @@ impl Ahrs {
     /// by `bias_std²/bias_time` per second (over a rest the growth is held, and a third of it is
     /// added when the rest ends).
     pub fn gyro_bias_covariance(&self) -> [f64; 9] {
-        let p = &self.s.bias.p;
+        let p = &self.sample_state.bias.p;
         let mut out = [0.0; 9];
         for i in 0..3 {
             for j in 0..3 {
@@ -369,22 +373,22 @@ impl Ahrs {
             .as_mut()
             .ok_or_else(|| Error::Numerical("AHRS without a state after its first sample".into()))?
             .core4_mut()?;
-        let saved = core.save4();
-        let mut s = self.s.clone();
+        let saved = core.save();
+        let mut s = self.sample_state.clone();
         let mut c = self.coeffs;
         if self.params.mag_latency == LATENCY_ESTIMATE {
             c.mag_lead = self.latency.estimate().unwrap_or(0.0) / self.params.sample_time;
         }
         match step(&self.params, &c, core, &mut s, gyr, acc, mag) {
             Ok((dq, mag_used)) => {
-                self.s = s;
+                self.sample_state = s;
                 // the latency estimate works on the raw samples (infallible, after the rest)
                 self.latency.push(&dq, if mag_used { mag } else { None });
                 self.samples += 1;
                 Ok(())
             }
             Err(e) => {
-                core.restore4(saved);
+                core.restore(saved);
                 Err(e)
             }
         }
@@ -452,24 +456,24 @@ impl Ahrs {
                         core.update_precision(&heading_exponent(&q0, kappa))?;
                     }
                     mag_state.start(m, &up_b);
-                    mag_state.observe(&core.mode4(), m, 0.0, &p, &c);
+                    mag_state.observe(&core.mode(), m, 0.0, &p, &c);
                 }
             }
         }
-        let omega = f.core4()?.omega4()?;
+        let omega = f.core4()?.omega()?;
         self.filter = Some(f);
-        self.s.gyr_lp = *gyr;
-        self.s.acc_lp = *acc_raw;
-        self.s.gyr_fast = *gyr;
-        self.s.acc_fast = *acc_raw;
-        self.s.rest_timer = 0.0;
-        self.s.rest = RestWindow::default();
-        self.s.rest_held = 0.0;
-        self.s.acc_filter = InertialLowPass::new(c.acc, c.acc_warmup, &acc);
-        self.s.mag = mag_state;
-        self.s.since = 0;
-        self.s.omega = [omega[0], omega[1], omega[2], omega[3]];
-        self.s.bias.pending = Matrix3::zeros();
+        self.sample_state.gyr_lp = *gyr;
+        self.sample_state.acc_lp = *acc_raw;
+        self.sample_state.gyr_fast = *gyr;
+        self.sample_state.acc_fast = *acc_raw;
+        self.sample_state.rest_timer = 0.0;
+        self.sample_state.rest = RestWindow::default();
+        self.sample_state.rest_held = 0.0;
+        self.sample_state.acc_filter = InertialLowPass::new(c.acc, c.acc_warmup, &acc);
+        self.sample_state.mag = mag_state;
+        self.sample_state.since = 0;
+        self.sample_state.omega = [omega[0], omega[1], omega[2], omega[3]];
+        self.sample_state.bias.pending = Matrix3::zeros();
         self.samples = 1;
         Ok(())
     }
@@ -525,7 +529,7 @@ impl Ahrs {
             }
             quat[k] = self.quaternion();
             if let Some(h) = health.as_deref_mut() {
-                h[k] = self.s.health.readout(None).score;
+                h[k] = self.sample_state.health.readout(None).score;
             }
         }
         Ok(())
@@ -598,7 +602,7 @@ fn step(
     ];
     let rate = norm3(&w) / dt;
     let dq = q4::from_rotation_vector(&w);
-    core.rotate4(&dq);
+    core.rotate(&dq);
     let scale = p.gyro_scale_noise * rate;
     // at most 1 rad² per sample: a wider noise is uniform for all purposes
     let q = ((p.gyro_noise * p.gyro_noise + scale * scale) * dt).min(1.0);
@@ -641,7 +645,7 @@ fn step(
     let mag_used = match mag {
         Some(m) => {
             let m = turn_forward(m, &w, c.mag_lead);
-            let used = s.mag.observe(&core.mode4(), &m, rate, p, c);
+            let used = s.mag.observe(&core.mode(), &m, rate, p, c);
             s.health.mag_sample(used, dt);
             used
         }
@@ -661,12 +665,12 @@ fn step(
 fn correct(p: &AhrsParams, c: &Coeffs, core: &mut Core<4>, s: &mut SampleState) -> Result<()> {
     let t = c.correct_time;
     let noise = s.bias.take_pending();
-    core.compose_moment4(&Vector4::from(s.omega), &noise_moment(&noise))?;
+    core.compose_moment(&Vector4::from(s.omega), &noise_moment(&noise))?;
     let lam_prior = {
-        let (m, z) = core.params4();
+        let (m, z) = core.params();
         precision(m, z)
     };
-    let q_prior = core.mode4();
+    let q_prior = core.mode();
 
     let mut evidence = Matrix4::zeros();
     let mut observed = false;
@@ -699,8 +703,8 @@ fn correct(p: &AhrsParams, c: &Coeffs, core: &mut Core<4>, s: &mut SampleState) 
     if observed {
         core.update_precision(&evidence)?;
     }
-    let omega = core.omega4()?;
-    let q_post = core.mode4();
+    let omega = core.omega()?;
+    let q_post = core.mode();
     // The posterior covariance in the prior's frame (the prior's precision plus the
     // evidence's, both at the prior mode: the Gaussian conditioning of the bias needs the two
     // in one frame; nearly unobserved directions of the two states need not line up).

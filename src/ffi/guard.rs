@@ -1,7 +1,10 @@
 //! The C boundary's safety net: the panic guard around every export, pointer and length checks,
 //! copying in and out of caller memory, and the thread-local last error message.
 //!
-//! All `unsafe` of the crate lives in `src/ffi/`; the helpers here keep it in a few small places.
+//! The crate's `unsafe` lives in `src/ffi/` and in one other file,
+//! `src/normalization/quadrature/simd.rs` (the call of the SIMD kernel compiled for the CPU
+//! features detected at run time); `tests/layering.rs` keeps it so. The helpers here keep the
+//! FFI's `unsafe` in a few small places.
 
 use std::any::Any;
 use std::cell::RefCell;

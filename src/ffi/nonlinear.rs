@@ -62,14 +62,14 @@ pub type bingham_log_likelihood_fn =
 /// Nonlinear prediction step: the state becomes the distribution of `a(x) (+) w`,
 /// `w ~ Bingham(m_w, z_w)`, for a transition function `a` given as a C callback.
 ///
-/// The state's deterministic samples (the `BINGHAM_SAMPLES_MOMENTS` points of
-/// `bingham_deterministic_samples()`, which reproduce its second and fourth moments) are passed
-/// through `fn`; the weighted second moment of the results is composed exactly with the
-/// noise's second moment and the Bingham distribution with that second moment is fitted
-/// (moment matching), as in `bingham_filter_predict()`. With `a` the identity this equals
-/// `bingham_filter_predict()` to rounding. The result's error is estimated and controlled with
-/// the default tolerance, as `bingham_filter_predict_nonlinear_opts()` describes: where the
-/// points' own estimate is too large, sampled points refine the moment.
+/// The new state is the Bingham distribution whose second moment is that of `a(x)` (`x` from
+/// the state) composed exactly with the noise's (moment matching), as in
+/// `bingham_filter_predict()`. The second moment of `a(x)` meets the default tolerance
+/// (`BINGHAM_NONLINEAR_PREDICT_TOLERANCE`, 5e-4 per entry; what it means:
+/// `bingham_nonlinear_options.tolerance`) within 20000 calls of `fn`, or the prediction is
+/// refused (`BINGHAM_ERR_NOT_CONVERGED`). With `a` the identity this equals
+/// `bingham_filter_predict()` to rounding. The method: `docs/design.md`, section "Nonlinear
+/// steps".
 ///
 /// - `fn`: the transition function (see `bingham_transition_fn` for its contract), called once
 ///   per sample, in the order of `bingham_deterministic_samples()`: 3 times for d = 2, 19 times
@@ -120,18 +120,17 @@ pub unsafe extern "C" fn bingham_filter_predict_nonlinear(
 /// the posterior `∝ prior(x) · L(x)`, for a likelihood `L` given by its logarithm as a C callback
 /// (e.g. a sensor that sees a nonlinear function of the orientation).
 ///
-/// The likelihood is absorbed iteratively: each round evaluates `fn` at the deterministic
-/// samples of the current approximation (the `BINGHAM_SAMPLES_MOMENTS` points of
-/// `bingham_deterministic_samples()`, plus fit-only points where those are too few to determine
-/// a quadratic form: 5 calls per round for d = 2, 19 for d = 4), fits a Bingham exponent to the
-/// values and multiplies it in, a fraction at a time where `log L` is far from a quadratic form
-/// over the samples (progressive tempering, so that the points do not collapse onto one); two
-/// final importance-weighted moment matches correct the result. Then the result is checked and
-/// corrected by randomized quasi-Monte Carlo importance sampling with the default tolerances
-/// (see `bingham_filter_update_nonlinear_opts()`): OK means the error estimate met them. Calls
-/// per update: 57 + 128 for a Bingham likelihood with d = 4 (absorbed exactly); measured counts
-/// for other likelihoods in `docs/accuracy.md` (nonlinear models). The rounds and the calls are
-/// bounded (beyond, `BINGHAM_ERR_NOT_CONVERGED`).
+/// The likelihood is absorbed at the deterministic samples of the current approximation (the
+/// `BINGHAM_SAMPLES_MOMENTS` points of `bingham_deterministic_samples()`, plus fit-only points
+/// where those are too few: 5 calls of `fn` per round for d = 2, 19 for d = 4), in as many
+/// rounds as `log L`'s distance from a quadratic form needs (bounded), and the result is
+/// checked and corrected by sampling around it. OK means the error estimates met the default
+/// tolerances: 2.5e-3 per entry of the posterior's second moment
+/// (`BINGHAM_NONLINEAR_UPDATE_TOLERANCE`; what it means: `bingham_nonlinear_options.tolerance`)
+/// and 0.05 spreads for its mode, within 20000 calls of `fn` (beyond,
+/// `BINGHAM_ERR_NOT_CONVERGED`); see `bingham_filter_update_nonlinear_opts()`. A likelihood
+/// that is a Bingham density is applied exactly. The method: `docs/design.md`, section
+/// "Nonlinear steps"; measured call counts: `docs/accuracy.md` (nonlinear models).
 ///
 /// For a likelihood that is a Bingham density with known parameters, `bingham_filter_update()`
 /// / `bingham_multiply()` compute the same product directly.
@@ -169,7 +168,11 @@ pub struct bingham_nonlinear_options {
     /// moment `E[x xᵀ]` (entries lie in [−1, 1]; for the prediction, before the noise is
     /// composed in). Finite and ≥ 0; 0 (the default) means the step's own default: 5e-4 for the
     /// prediction, 2.5e-3 for the update (`BINGHAM_NONLINEAR_PREDICT_TOLERANCE`,
-    /// `BINGHAM_NONLINEAR_UPDATE_TOLERANCE`; their reasons in `docs/guide.md`).
+    /// `BINGHAM_NONLINEAR_UPDATE_TOLERANCE`; their reasons in `docs/guide.md`). The estimate is
+    /// statistical, not a bound: three standard errors of the sampled estimate (or, for a
+    /// prediction the deterministic points settle, the difference of their two rules); the
+    /// error exceeds it rarely, not never. The method: `docs/design.md`, section "Nonlinear
+    /// steps".
     pub tolerance: f64,
     /// Update only: the largest accepted error estimate of the posterior mode as a fraction of
     /// the posterior's spread `sqrt(1 − largest eigenvalue of E[x xᵀ])` (both as chords between
@@ -206,9 +209,9 @@ const _: () = assert!(
 pub struct bingham_nonlinear_report {
     /// Callback calls made.
     pub calls: usize,
-    /// The error estimate (absolute) of the result's second moment, largest entry: 3 standard
-    /// errors from 16 independent randomizations (sampled), or the embedded rule's difference
-    /// (deterministic). At most the tolerance.
+    /// The error estimate (absolute) of the result's second moment, largest entry: three
+    /// standard errors of the sampled estimate (sampled), or the difference of the
+    /// deterministic points' two rules (deterministic). At most the tolerance.
     pub error_estimate: f64,
     /// Update: the error estimate of the mode as a fraction of the posterior's spread (at most
     /// the mode tolerance); prediction: 0 (not estimated).
@@ -245,17 +248,14 @@ pub unsafe extern "C" fn bingham_nonlinear_options_default(
 /// `bingham_filter_predict_nonlinear()` with its error controlled by `opts` and what it
 /// measured written to `report`.
 ///
-/// The predicted second moment `E[a(x) a(x)ᵀ]` is formed from the deterministic points (19
-/// for d = 4, 3 for d = 2) with an error estimate from the second-moment rule embedded in the
-/// same points; a model the points integrate exactly (the identity, a rotation) costs nothing
-/// more. Where the estimate is above a tenth of the tolerance, the moment is computed by
-/// randomized quasi-Monte Carlo over the state (16 independently shifted Sobol nets mapped to
-/// the state's angular central Gaussian envelope, 8 points each at first, doubled until 3
-/// standard errors meet the tolerance), with the fourth-degree monomials of the state's
-/// principal coordinates as control variates (their expectations are exact, so only what the
-/// 19 points miss is sampled). Beyond `opts->max_calls` calls the prediction is refused with
-/// `BINGHAM_ERR_NOT_CONVERGED` and a message that gives the estimate reached; the filter is
-/// then unchanged. Figures: `docs/accuracy.md` (nonlinear models).
+/// The predicted second moment `E[a(x) a(x)ᵀ]` (before the noise is composed in) is computed
+/// with an error estimate of at most `opts->tolerance` in every entry; a model the
+/// deterministic points integrate exactly (the identity, a rotation) costs no calls beyond
+/// theirs (see `bingham_filter_predict_nonlinear()`). A prediction that would need more than
+/// `opts->max_calls` calls of `fn` is refused with `BINGHAM_ERR_NOT_CONVERGED` and a message
+/// that gives the estimate reached; the filter is then unchanged. The method:
+/// `docs/design.md`, section "Nonlinear steps"; figures: `docs/accuracy.md` (nonlinear
+/// models).
 ///
 /// - `opts`: the tolerance and the budget (`NULL`: the defaults).
 /// - `report`: receives what was measured (`NULL`: not wanted); written only on success.
@@ -286,19 +286,15 @@ pub unsafe extern "C" fn bingham_filter_predict_nonlinear_opts(
 /// `bingham_filter_update_nonlinear()` with its error controlled by `opts` and what it measured
 /// written to `report`.
 ///
-/// The deterministic approximation of the posterior (tempering and importance correction, see
-/// `bingham_filter_update_nonlinear()`) is checked and corrected by randomized quasi-Monte Carlo
-/// importance sampling around it: 16 independently shifted Sobol nets mapped to the
-/// approximation's angular central Gaussian envelope, 8 points each at first, weighted by
-/// `prior · L / envelope`, with the approximation's own weights on the same points as a control
-/// variate (the correction is exactly 0 where the approximation is the posterior: a Bingham
-/// likelihood stays exact). The points are doubled until 3 standard errors of every entry of the
-/// second moment meet the tolerance and those of the mode meet `mode_tolerance` spreads; where
-/// the correction is large the envelope is moved to the corrected estimate first. Beyond
-/// `opts->max_calls` calls (the deterministic part's included) the update is refused with
+/// The posterior's second moment is computed with an error estimate of at most
+/// `opts->tolerance` in every entry and its mode with one of at most `opts->mode_tolerance`
+/// spreads (a Bingham likelihood stays exact: the check changes nothing where the
+/// deterministic approximation is the posterior). An update that would need more than
+/// `opts->max_calls` calls of `fn` (the deterministic part's included) is refused with
 /// `BINGHAM_ERR_NOT_CONVERGED` and a message giving the estimates reached; the filter is then
-/// unchanged. Multimodal posteriors: the sampling sees the mode(s) the envelope covers; a
-/// separate mode far from the prior's bulk may be missed (see `docs/guide.md`). Figures:
+/// unchanged. Multimodal posteriors: the sampling sees the mode(s) near the deterministic
+/// approximation; a separate mode far from the prior's bulk may be missed (see
+/// `docs/guide.md`). The method: `docs/design.md`, section "Nonlinear steps"; figures:
 /// `docs/accuracy.md` (nonlinear models).
 ///
 /// - `opts`: the tolerances and the budget (`NULL`: the defaults).

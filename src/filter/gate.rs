@@ -15,9 +15,9 @@
 
 use nalgebra::Const;
 
-use super::core::{log_joint_normalizer, Core};
 use super::noise::Role;
-use super::Vect;
+use super::state::{log_joint_normalizer, Core};
+use super::types::Vect;
 use crate::canonical::unit;
 use crate::error::{Error, Result};
 use crate::linalg::congruence;

@@ -22,7 +22,7 @@
 //!
 //! # Memory and concentration limits
 //!
-//! The state lives on the stack (`d = 2, 4`, fixed-size nalgebra types, the `Core` in `core`):
+//! The state lives on the stack (`d = 2, 4`, fixed-size nalgebra types, the `Core` in `state`):
 //! after the first step with a given noise a predict or update performs **no heap allocation**;
 //! noises are validated and prepared once and cached on their parameters' bit patterns
 //! (`noise`); the moment matching is warm-started from the previous prediction. Updates stay
@@ -32,44 +32,28 @@
 //! The nonlinear steps are in `nonlinear`. Derivations: `docs/design.md` (§ "Filter"); speed:
 //! `docs/speed.md`.
 
-mod control_variate;
-mod core;
 mod gate;
 mod noise;
 mod nonlinear;
-mod nonlinear_options;
-mod rqmc;
-mod sampled;
 mod spin;
+mod state;
+mod types;
 mod world;
 
-use nalgebra::{Matrix4, SMatrix, SVector};
+use nalgebra::Matrix4;
 
 use crate::distribution::Bingham;
 use crate::error::{Error, Result};
 
-pub(crate) use self::core::Core;
 pub use gate::Gated;
-pub(crate) use noise::Noise;
 pub use nonlinear::{
-    CORRECTION_PASSES, MAX_TEMPERING_STEPS, MIN_CORRECTION_SHARE, TEMPERING_RESIDUAL,
-};
-pub use nonlinear_options::{
-    NonlinearMethod, NonlinearOptions, NonlinearReport, DEFAULT_MAX_CALLS, DEFAULT_MODE_TOLERANCE,
-    DEFAULT_PREDICT_TOLERANCE, DEFAULT_UPDATE_TOLERANCE,
+    NonlinearMethod, NonlinearOptions, NonlinearReport, CORRECTION_PASSES, DEFAULT_MAX_CALLS,
+    DEFAULT_MODE_TOLERANCE, DEFAULT_PREDICT_TOLERANCE, DEFAULT_UPDATE_TOLERANCE,
+    MAX_TEMPERING_STEPS, MIN_CORRECTION_SHARE, TEMPERING_RESIDUAL,
 };
 pub use spin::SpinFilter;
-
-/// A `D×D` matrix on the stack.
-type Mat<const D: usize> = SMatrix<f64, D, D>;
-/// A vector of length `D` on the stack.
-type Vect<const D: usize> = SVector<f64, D>;
-
-/// The largest concentration `|z_i|` the prediction uses (see the module documentation,
-/// "Concentration limits"): before the moments of the state and of the process noise are
-/// formed, every `z_i < −MAX_CONCENTRATION` is replaced by `−MAX_CONCENTRATION`.
-/// `z = −1e10` corresponds to an angular standard deviation of about `1/√(2·1e10) ≈ 7 µrad`.
-pub const MAX_CONCENTRATION: f64 = 1e10;
+pub(crate) use state::Core;
+pub use types::MAX_CONCENTRATION;
 
 /// A recursive Bingham filter for `d = 2` (axes) or `d = 4` (unit quaternions).
 ///
@@ -311,18 +295,21 @@ impl BinghamFilter {
 
     /// Nonlinear prediction `x_{k+1} = a(x_k) ⊕ w_k` with `w_k ~ Bingham(m_w, z_w)`.
     ///
-    /// `a` is called at the deterministic samples of the state (the
+    /// `a` is called with a unit vector `x` (length d) and must write the unit vector `a(x)`
+    /// into its second argument (length d, unit within `UNIT_TOL`; it is then normalized). It
+    /// returns `Err(message)` to signal failure. The sign of `a(x)` does not matter, and
+    /// `a(−x) = ±a(x)` is the caller's contract (an orientation and its negative are the same
+    /// rotation). `a` is called at the state's deterministic points (the
     /// [`Scheme::Moments`](crate::deterministic::Scheme::Moments) points: 3 for d = 2, 19 for
-    /// d = 4), and at sampled points where their error estimate asks for them (see
-    /// [`predict_nonlinear_opts`](Self::predict_nonlinear_opts); the default tolerance 5e-4,
-    /// at most 20 000 calls, beyond that `Error::NotConverged`), with a unit vector `x` (length d) and must
-    /// write the unit vector `a(x)` into its second argument (length d, unit within
-    /// `UNIT_TOL`; it is then normalized). It returns `Err(message)` to signal failure. The
-    /// sign of `a(x)` does not matter, and `a(−x) = ±a(x)` is the caller's contract (an
-    /// orientation and its negative are the same rotation). The second moment of `a(x)` is
-    /// formed from the weighted points, composed exactly with the noise's moment and refitted
-    /// (moment matching), as in [`predict`](Self::predict). With `a` the identity this equals
-    /// `predict` to rounding, since the points reproduce the state's second moment exactly.
+    /// d = 4) and, where their error estimate asks, at sampled points.
+    ///
+    /// The new state is the Bingham distribution whose second moment is that of `a(x)` (`x` from
+    /// the state) composed exactly with the noise's (moment matching), as in
+    /// [`predict`](Self::predict); the second moment of `a(x)` meets the default tolerance
+    /// ([`DEFAULT_PREDICT_TOLERANCE`], 5e-4 per entry) within [`DEFAULT_MAX_CALLS`] (20 000)
+    /// calls of `a`, or the step is refused with `Error::NotConverged` (see
+    /// [`predict_nonlinear_opts`](Self::predict_nonlinear_opts)). With `a` the identity this
+    /// equals `predict` to rounding. The method: `docs/design.md`, section "Nonlinear steps".
     ///
     /// Errors: those of [`predict`](Self::predict), [`Error::Callback`] if `a` fails or
     /// returns a non-finite or non-unit vector, `Error::NotConverged` if the tolerance is not
@@ -337,15 +324,14 @@ impl BinghamFilter {
     }
 
     /// [`predict_nonlinear`](Self::predict_nonlinear) with the error controlled by `opts`: the
-    /// second moment of `a(x)` is formed from the 19 deterministic points (d = 4; 3 for d = 2)
-    /// and its error estimated by the second-moment rule embedded in them (the difference of
-    /// the two estimates, an upper estimate of the 19-point rule's error); where that exceeds
-    /// `opts.tolerance`, by randomized quasi-Monte Carlo over the state's envelope with the
-    /// points doubled until 3 standard errors (from 16 independent randomizations) meet the
-    /// tolerance, or refused with [`Error::NotConverged`] (the message gives the estimate)
-    /// when that would take more than `opts.max_calls` calls. Returns what was measured.
-    /// Errors: those of `predict_nonlinear`, `InvalidArgument` for bad options. On error the
-    /// filter is unchanged.
+    /// second moment of `a(x)` under the state (before the noise is composed in) is computed
+    /// with an error estimate of at most `opts.tolerance` in every entry (0: the default,
+    /// [`DEFAULT_PREDICT_TOLERANCE`]; what the estimate means: [`NonlinearOptions::tolerance`]),
+    /// or the step is refused with [`Error::NotConverged`] (the message gives the estimate
+    /// reached) when that would take more than `opts.max_calls` calls of `a`. Returns what was
+    /// measured. The method: `docs/design.md`, section "Nonlinear steps". Errors: those of
+    /// `predict_nonlinear`, `InvalidArgument` for bad options. On error the filter is
+    /// unchanged.
     pub fn predict_nonlinear_opts<F>(
         &mut self,
         mut a: F,
@@ -364,42 +350,24 @@ impl BinghamFilter {
     /// contract) or `Err(message)` on failure. Log-likelihoods, so sharp likelihoods do not
     /// underflow.
     ///
-    /// The algorithm (each round calls `log_l` at the deterministic samples of the current
-    /// approximation, [`Scheme::Moments`](crate::deterministic::Scheme::Moments), plus a few
-    /// fit-only points where those are too few to determine a quadratic form: 5 calls per round
-    /// for d = 2, 19 for d = 4):
+    /// The new state is the Bingham distribution that approximates the posterior: the
+    /// likelihood is absorbed at the deterministic points of the current approximation
+    /// ([`Scheme::Moments`](crate::deterministic::Scheme::Moments), plus fit-only points where
+    /// those are too few: 5 calls of `log_l` per round for d = 2, 19 for d = 4) in tempered
+    /// steps (at most [`MAX_TEMPERING_STEPS`], each applying at most [`TEMPERING_RESIDUAL`] of
+    /// what the fitted exponent misses; then [`CORRECTION_PASSES`] importance corrections), and
+    /// the result is checked and corrected by sampling around it until the error estimate of
+    /// its second moment meets [`DEFAULT_UPDATE_TOLERANCE`] (2.5e-3 per entry) and that of its
+    /// mode [`DEFAULT_MODE_TOLERANCE`] (0.05 spreads), within [`DEFAULT_MAX_CALLS`] (20 000)
+    /// calls of `log_l` (see [`update_nonlinear_opts`](Self::update_nonlinear_opts)). A
+    /// likelihood that is a Bingham density is applied exactly (the Bayes product). The method:
+    /// `docs/design.md`, section "Nonlinear steps"; measured call counts: `docs/accuracy.md`
+    /// (nonlinear models).
     ///
-    /// 1. **Progressive (tempered) linearization.** Fit a Bingham exponent `xᵀ P x` to `log L`
-    ///    at the samples (weighted least squares, in the approximation's scaled principal
-    ///    coordinates) and multiply the current approximation by `exp(Δβ xᵀ P x)` (an exact
-    ///    Bayes product), with `Δβ` chosen so that the part of `log L` the exponent does not
-    ///    capture (the fit's largest residual over the samples) contributes at most
-    ///    [`TEMPERING_RESIDUAL`] per step; repeat with the new approximation's samples until
-    ///    `Σ Δβ = 1`. Where `log L` is a Bingham exponent the residual vanishes and the whole
-    ///    likelihood is applied at once: the exact product. A likelihood far from log-quadratic
-    ///    over the prior's spread is approached in several steps, each fitted where the
-    ///    approximation now is, and never collapses onto one sample.
-    /// 2. **Importance correction** ([`CORRECTION_PASSES`] rounds): reweight the samples of the
-    ///    approximation by `prior · L / approximation` and fit the Bingham distribution to their
-    ///    second moment (moment matching; the weights are constant when the approximation is the
-    ///    posterior, so an exact result stays exact). Skipped where the weights would collapse
-    ///    (effective share below [`MIN_CORRECTION_SHARE`]) or the approximation is sharper than
-    ///    the moments can represent (`|z| > MAX_CONCENTRATION`).
-    ///
-    /// 3. **Sampled check and correction** with the default options (see
-    ///    [`update_nonlinear_opts`](Self::update_nonlinear_opts)): randomized quasi-Monte Carlo
-    ///    importance sampling around the result, to 3 standard errors ≤ 2.5e-3 in every entry of
-    ///    the second moment and ≤ 0.05 spreads in the mode, or `Error::NotConverged` beyond
-    ///    20 000 calls.
-    ///
-    /// At most [`MAX_TEMPERING_STEPS`] steps; beyond that `Error::NotConverged`. Calls of
-    /// `log_l`: the deterministic part's `(steps + CORRECTION_PASSES) × samples` (57 for a
-    /// Bingham likelihood, d = 4) plus at least 128 sampled points; measured counts in
-    /// `docs/accuracy.md` (nonlinear models).
-    ///
-    /// Errors: [`Error::Callback`] (failure or a non-finite value), `NotConverged` (tempering
-    /// or the tolerance not met within the budget), and the moment-matching errors. On error the
-    /// filter is unchanged. No heap allocation.
+    /// Errors: [`Error::Callback`] (failure or a non-finite value), `NotConverged` (the
+    /// likelihood not absorbed within [`MAX_TEMPERING_STEPS`], or the tolerance not met within
+    /// the budget), and the moment-matching errors. On error the filter is unchanged. No heap
+    /// allocation.
     pub fn update_nonlinear<L>(&mut self, mut log_l: L) -> Result<()>
     where
         L: FnMut(&[f64]) -> std::result::Result<f64, String>,
@@ -409,16 +377,15 @@ impl BinghamFilter {
     }
 
     /// [`update_nonlinear`](Self::update_nonlinear) with the error controlled by `opts`: the
-    /// deterministic approximation is checked, and corrected, by randomized quasi-Monte Carlo
-    /// importance sampling around it (16 independent randomizations, `8 × 16` points at first,
-    /// doubled until 3 standard errors of every second-moment entry meet `opts.tolerance` and
-    /// those of the mode `opts.mode_tolerance` spreads; the sampling envelope is moved to the
-    /// corrected estimate when the correction is large). The control variate makes the check
-    /// cost nothing in accuracy where the approximation is already the posterior (an exact
-    /// Bingham likelihood stays exact). Refused with [`Error::NotConverged`] (the message gives
-    /// the estimate) when the tolerance would take more than `opts.max_calls` calls. Returns
-    /// what was measured. A posterior with several separated modes: the sampling sees the
-    /// mode(s) near the deterministic approximation; see `docs/guide.md`.
+    /// posterior's second moment is computed with an error estimate of at most `opts.tolerance`
+    /// in every entry (0: the default, [`DEFAULT_UPDATE_TOLERANCE`]; what the estimate means:
+    /// [`NonlinearOptions::tolerance`]) and its mode with one of at most `opts.mode_tolerance`
+    /// spreads, or the update is refused with [`Error::NotConverged`] (the message gives the
+    /// estimates reached) when that would take more than `opts.max_calls` calls of `log_l`.
+    /// Where the deterministic approximation is already the posterior (a Bingham likelihood)
+    /// the check leaves it exact. Returns what was measured. A posterior with several separated
+    /// modes: the sampling sees the mode(s) near the deterministic approximation; see
+    /// `docs/guide.md`. The method: `docs/design.md`, section "Nonlinear steps".
     pub fn update_nonlinear_opts<L>(
         &mut self,
         mut log_l: L,

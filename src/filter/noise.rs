@@ -5,7 +5,7 @@
 use nalgebra::Const;
 use std::sync::OnceLock;
 
-use super::{Mat, Vect, MAX_CONCENTRATION};
+use super::types::{Mat, Vect, MAX_CONCENTRATION};
 use crate::canonical::params_row_major;
 use std::borrow::Cow;
 

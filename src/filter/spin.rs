@@ -24,10 +24,10 @@ use std::sync::OnceLock;
 
 use nalgebra::Const;
 
-use super::core::{composed_moment, log_joint_normalizer};
 use super::noise::{NoiseCache, Role};
+use super::state::{composed_moment, log_joint_normalizer};
+use super::types::{Mat, Vect, MAX_CONCENTRATION};
 use super::world::{conjugation, world_likelihood_m};
-use super::{Mat, Vect, MAX_CONCENTRATION};
 use crate::canonical::{params_row_major, unit};
 use crate::distribution::{bayes_product, log_f_omega, omega, Bingham};
 use crate::error::{Error, Result};
@@ -461,7 +461,7 @@ mod tests {
     /// rounding.
     #[test]
     fn the_shared_prediction_changes_no_bit() {
-        use crate::filter::core::log_evidence;
+        use crate::filter::state::log_evidence;
         let id = [
             1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
         ];

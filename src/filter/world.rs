@@ -15,9 +15,9 @@
 
 use nalgebra::Const;
 
-use super::core::{composed_moment, Core};
 use super::noise::Role;
-use super::{Mat, Vect};
+use super::state::{composed_moment, Core};
+use super::types::{Mat, Vect};
 use crate::canonical::unit;
 use crate::error::Result;
 use crate::linalg::congruence;

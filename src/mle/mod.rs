@@ -11,14 +11,15 @@
 //! `Const<4>`, warm-started from the previous prediction's solution and derivatives) both call
 //! `fit_second_moment`. The composition [`Bingham::compose`] (moment matching) lives here too.
 //!
-//! Files: this one holds the public fitting API and the solution type ([`Derivs`]); `newton`
-//! the Newton iteration for d ≥ 3 with its starts; `asymptotic` the series of the moment map
-//! for concentrated Binghams that corrects its steps (d = 3, 4); `pair` the closed-form d = 2
-//! solver.
+//! Files: this one holds the public fitting API; `solution` the solution type (`Derivs`) and
+//! what the solvers share; `newton` the Newton iteration for d ≥ 3 with its starts; `asymptotic`
+//! the series of the moment map for concentrated Binghams that corrects its steps (d = 3, 4);
+//! `d2` the closed-form d = 2 solver.
 
 mod asymptotic;
+mod d2;
 mod newton;
-mod pair;
+mod solution;
 
 use nalgebra::allocator::Allocator;
 use nalgebra::{Const, DMatrix, DefaultAllocator, Dim, Dyn};
@@ -30,13 +31,13 @@ use crate::linalg::{sym_eigen, symmetrize, Square, Vector};
 use crate::quaternion::compose_moments;
 
 use newton::{solve_z, Start};
+pub(crate) use solution::Derivs;
+pub use solution::MLE_TOL;
 
 /// Smallest accepted eigenvalue of the trace-normalized second moment. Below it the moment
 /// is singular to working precision (the eigenvalues of `S` are only known to about 1e-16) and
 /// the maximum-likelihood concentration would be `−∞`. ω̂ = 1e-13 corresponds to z ≈ −5e12.
 pub const OMEGA_MIN: f64 = 1e-13;
-/// Convergence tolerance: `max_i |ω_i(z) − ω̂_i| / ω̂_i`.
-pub const MLE_TOL: f64 = 1e-13;
 
 /// The Bingham distribution with second moment `s` (d×d, symmetric within 1e-10·trace,
 /// positive semidefinite, any positive scale: it is normalized by its trace).
@@ -200,20 +201,6 @@ pub fn mle_from_samples(d: usize, x: &[f64], w: Option<&[f64]>) -> Result<Bingha
         s.ger(wk, &v, &v, 1.0);
     }
     mle_from_second_moment(&s)
-}
-
-/// `log F`'s gradient `ω` and Hessian at a point `z` (as the solver sees it: `z[d−1] = 0`).
-/// In a solution returned by [`solve_z`] the Hessian may be that of the previous iterate (see
-/// [`newton::newton`]). `hess` holds the Hessian row-major in its storage (`hess.as_slice()`, as
-/// [`newton::newton`] reads and writes it).
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) struct Derivs<D: Dim>
-where
-    DefaultAllocator: Allocator<D, D> + Allocator<D>,
-{
-    pub(crate) z: Vector<D>,
-    pub(crate) grad: Vector<D>,
-    pub(crate) hess: Square<D>,
 }
 
 /// Number of Newton steps the MLE takes for the target `ω̂` (diagnostics and benchmarks).

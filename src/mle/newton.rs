@@ -1,4 +1,4 @@
-//! The moment-matching Newton iteration (d ≥ 3; d = 2 is handed to `pair`) and its starting
+//! The moment-matching Newton iteration (d ≥ 3; d = 2 is handed to `d2`) and its starting
 //! points: [`solve_z`] on the solver's types, [`newton`] on slices, [`initial_guess`] for a
 //! cold start.
 
@@ -7,8 +7,8 @@ use nalgebra::DefaultAllocator;
 use nalgebra::Dim;
 
 use super::asymptotic;
-use super::pair::{newton_pair, pair_solve};
-use super::{Derivs, MLE_TOL};
+use super::d2::{newton_pair, pair_solve};
+use super::solution::{Derivs, NewtonStart, MLE_TOL};
 use crate::error::{Error, Result, MAX_DIM};
 use crate::linalg::{cholesky_solve, zero_vector, zeros, Vector};
 use crate::normalization::{log_normalization_into, Method};
@@ -79,15 +79,6 @@ impl Scratch {
             &mut self.big[..]
         }
     }
-}
-
-/// Where [`newton`] starts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum NewtonStart {
-    /// From [`initial_guess`].
-    Guess,
-    /// From the point in `z` whose gradient and Hessian are already in `grad` and `hess`.
-    Evaluated,
 }
 
 /// The MLE's Newton iteration, allocation-free for d ≤ 4. Solves `ω(z) = target` (ascending,

@@ -15,9 +15,10 @@
 //! multiply-add ([`Fused`], only inside functions compiled with FMA enabled, where it is one
 //! instruction; elsewhere it would be a slow library call).
 
-use super::{
-    Piece, Poly, ASY_D_HI, ASY_D_LO, ASY_I0_HI, ASY_I0_LO, ASY_Q_HI, ASY_Q_LO, ASY_Q_TAIL,
-    ASY_TAIL, NT, PIECES, Q_PIECES, X_ASY,
+use super::pieces::{piece_index, Piece, Poly, NT};
+use super::tables::{
+    ASY_D_HI, ASY_D_LO, ASY_I0_HI, ASY_I0_LO, ASY_Q_HI, ASY_Q_LO, ASY_Q_TAIL, ASY_TAIL, PIECES,
+    Q_PIECES, X_ASY,
 };
 use std::ops::{Add, Mul, Sub};
 
@@ -442,8 +443,8 @@ impl Span {
     pub fn of(lo: f64, hi: f64) -> Span {
         if lo >= X_ASY {
             Span::Asymptotic
-        } else if hi < X_ASY && super::piece_index(lo) == super::piece_index(hi) {
-            Span::Piece(super::piece_index(lo))
+        } else if hi < X_ASY && piece_index(lo) == piece_index(hi) {
+            Span::Piece(piece_index(lo))
         } else {
             Span::Mixed
         }
@@ -544,11 +545,11 @@ pub(crate) fn bessel<
         bessel_asymptotic::<A, L, FOURTH>(x, k, &mut out);
     }
     if any_small {
-        // piece index per lane (`super::piece_index`), clamped so that lanes beyond X_ASY
+        // piece index per lane (`pieces::piece_index`), clamped so that lanes beyond X_ASY
         // (whose result is discarded) index a valid piece
         let mut j = [0usize; L];
         for (jl, xl) in j.iter_mut().zip(x.0) {
-            *jl = super::piece_index(xl).min(PIECES.len() - 1);
+            *jl = piece_index(xl).min(PIECES.len() - 1);
         }
         // coefficient `$field` of each lane's piece of `$table`
         macro_rules! gather {

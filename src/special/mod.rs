@@ -17,35 +17,14 @@
 //! without fused multiply-adds). Speed: `docs/speed.md` (`benches/special.rs`).
 
 pub(crate) mod lanes;
+mod pieces;
 mod tables;
 
+use pieces::{piece_index, Lanes, NT};
 use tables::{
-    ASY_D_HI, ASY_D_LO, ASY_I0_HI, ASY_I0_LO, ASY_Q_HI, ASY_Q_LO, ASY_Q_TAIL, ASY_TAIL, NT, PIECES,
+    ASY_D_HI, ASY_D_LO, ASY_I0_HI, ASY_I0_LO, ASY_Q_HI, ASY_Q_LO, ASY_Q_TAIL, ASY_TAIL, PIECES,
     Q_PIECES, X_ASY,
 };
-
-/// Coefficients of one function on one piece: `f(c + t) = hi + (lo + t·g(t))`, `g(t) = Σ q[k] t^k`.
-#[derive(Clone, Copy)]
-struct Poly {
-    hi: f64,
-    lo: f64,
-    q: [f64; NT],
-}
-
-/// Two values evaluated together by the same sequence of operations.
-type Lanes = [f64; 2];
-
-/// One piece of `[0, 128)`: midpoint `c` and, as lane pairs `[i1, d]`, the coefficients of
-/// `e^{-x} I1(x)` (on the first piece `e^{-x} I1(x) / x`) and of `e^{-x} (I0(x) − I1(x))`:
-/// `f(c + t) = hi + (lo + t·Σ q[k] t^k)` in each lane.
-#[derive(Clone, Copy)]
-#[repr(C, align(16))]
-struct Piece {
-    q: [Lanes; NT],
-    hi: Lanes,
-    lo: Lanes,
-    c: f64,
-}
 
 #[inline(always)]
 fn madd(a: Lanes, b: Lanes, t: f64) -> Lanes {
@@ -82,25 +61,6 @@ fn estrin(q: &[f64; NT], t: f64) -> f64 {
     let b0 = a0 + a1 * t2;
     let b1 = a2 + a3 * t2;
     (b0 + b1 * t4) + a4 * t8
-}
-
-/// Index of a piece containing `x`, `0 ≤ x < 128` (branch-free; no float-to-int conversion).
-///
-/// `[0, 8)`: 32 pieces of width 1/4; `x + 8 ∈ [8, 16)` has the piece number in its top five
-/// mantissa bits. Where `x + 8` rounds up across a boundary the next piece is chosen, whose
-/// polynomial is then used at most half an ulp of 8 outside its interval — harmless (this includes
-/// `x` just below 8, where `x + 8` may round to 16 and select piece 32, the first one of `[8, 8.5)`).
-/// `[8, 128)`: 16 pieces per octave, numbered by the biased exponent (1026..=1029) and the top four
-/// mantissa bits of `x` itself.
-#[inline(always)]
-fn piece_index(x: f64) -> usize {
-    let small = (((x + 8.0).to_bits() >> 47) as usize).wrapping_sub(1026 << 5);
-    let large = ((x.to_bits() >> 48) as usize).wrapping_sub((1026 << 4) - 32);
-    if x < 8.0 {
-        small
-    } else {
-        large
-    }
 }
 
 /// `(i0e, i1e, i0e − i1e)` for `x ≥ 0` (or NaN).

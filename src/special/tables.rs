@@ -2,14 +2,12 @@
 // do not edit by hand.
 //! Coefficient tables of the Bessel fits in `special` (see that module's documentation).
 
-use super::{Piece, Poly};
+use super::pieces::{Piece, Poly, NT};
 
 // Truncation errors (coefficients rounded to doubles, evaluated exactly):
 // pieces of [0, 128): i1e 2.0e-17, d 2.3e-17, q 2.0e-17
 // asymptotic series, x >= 128.0: i0e 2.7e-18, d 2.3e-18, q 3.9e-19
 
-/// Number of coefficients of each piece's divided-difference polynomial.
-pub(super) const NT: usize = 10;
 /// Start of the asymptotic series.
 pub(super) const X_ASY: f64 = 128.0;
 

@@ -10,9 +10,10 @@
 //! error is below 1e-16. ω and the Hessian are the same integrals with the factors
 //! `½/(λ_i + s)` and their products (differentiation under the integral).
 //!
-//! The parts: `complex` (the complex arithmetic and the argument-tracking product), `path`
-//! (solving `φ(s) = −w²` point by point along the path), `steps` (the singularities and the step
-//! they allow) and this module (the nested rule, the acceptance test and the results).
+//! The parts: `complex` (the complex arithmetic and the argument-tracking product), `problem`
+//! (the shifted problem and a point of its contour), `path` (solving `φ(s) = −w²` point by point
+//! along the path), `steps` (the singularities and the step they allow) and this module (the
+//! nested rule, the acceptance test and the results).
 //! Contract: finite results for every finite sorted `z` with `z[d−1] = 0`, `F` and every `ω_i`
 //! to near machine precision, or `Error::NotConverged` beyond 7169 nodes (never observed).
 //! The derivation, the error bound and the cost are in `docs/design.md` (§ "The contour method
@@ -20,20 +21,20 @@
 
 mod complex;
 mod path;
+mod problem;
 mod steps;
 #[cfg(test)]
 mod tests;
 
 use crate::error::{Error, Result};
 use complex::Cx;
+use problem::{Contour, Node};
 use std::f64::consts::{LN_2, PI};
-use steps::{planned_step, predicted_error};
+use steps::{planned_step, predicted_error, H_COARSE};
 
 /// End of the integration range in `w` (production schedule): the tail beyond is below
 /// `e^{−42.25} < 5e-19` relative (module docs).
 const W_END: f64 = 6.5;
-/// Largest coarsest step of the production schedule.
-const H_COARSE: f64 = 0.5;
 /// The fixed schedule (convergence studies): `h₀ = 0.5` on `[0, 7]`, 14 coarsest steps.
 const FIXED_N0: usize = 14;
 /// Hard limit on the number of nodes (the finest level of the fixed schedule, `h = 2⁻¹⁰`).
@@ -48,49 +49,8 @@ const TOL: f64 = 1e-16;
 const HESS_TOL: f64 = 1e-11;
 /// See [`HESS_TOL`].
 const HESS_PREDICTED_TOL: f64 = 1e-15;
-/// The step is chosen such that every singularity's predicted error term is below `e^{−LN_TARGET}`
-/// (3e-17), below what the acceptance test [`TOL`] demands (so that the test passes at the
-/// planned level).
-const LN_TARGET: f64 = 38.0;
-/// Halley's step is accepted when `|δ|·κ ≤ HALLEY_ACCEPT` (κ: the relative sensitivity of `φ'`,
-/// `φ''` and the `r_j` to a shift of `s`): the cubically converged point is then exact to
-/// `~(|δ|κ)³ ≤ 1e-18` relative.
-const HALLEY_ACCEPT: f64 = 1e-6;
 /// Maximal recursion depth of the step subdivision in path following.
 const MAX_DEPTH: u32 = 12;
-
-/// A point of the contour: `w`, `s(w)` and its first three derivatives.
-#[derive(Clone, Copy, Debug)]
-struct Node {
-    w: f64,
-    s: Cx,
-    ds: Cx,
-    dds: Cx,
-    d3s: Cx,
-}
-
-/// The shifted problem: distinct `λ_j = c − z_j` with multiplicities, `½ Σ m_j/λ_j ≈ 1`.
-struct Contour {
-    lam: Vec<f64>,
-    inv_lam: Vec<f64>,
-    mult: Vec<f64>,
-    /// `m_j` as a count.
-    count: Vec<u32>,
-    /// Whether some `m_j ≥ 2`.
-    tied: bool,
-    /// `1/λ_j` of the untied values (`m_j = 1`).
-    single_il: Vec<f64>,
-    /// `m_j/λ_j`.
-    mult_il: Vec<f64>,
-    /// `1 − ½ Σ m_j/λ_j` (zero up to rounding), kept so that `φ'` is exact.
-    om: f64,
-    /// `φ''(0) = ½ Σ m_j/λ_j²`.
-    a: f64,
-    /// `φ'''(0) = −Σ m_j/λ_j³`.
-    b: f64,
-    /// `φ''''(0) = 3 Σ m_j/λ_j⁴`.
-    c4: f64,
-}
 
 /// Neumaier's compensated summation.
 #[derive(Default)]

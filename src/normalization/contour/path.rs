@@ -3,7 +3,13 @@
 //! integrands at a node.
 
 use super::complex::{clog1p, ArgProduct, Cx};
-use super::*;
+use super::problem::{Contour, Node};
+use crate::error::{Error, Result};
+
+/// Halley's step is accepted when `|δ|·κ ≤ HALLEY_ACCEPT` (κ: the relative sensitivity of `φ'`,
+/// `φ''` and the `r_j` to a shift of `s`): the cubically converged point is then exact to
+/// `~(|δ|κ)³ ≤ 1e-18` relative.
+const HALLEY_ACCEPT: f64 = 1e-6;
 
 impl Contour {
     /// `φ(s) = s − ½ Σ m_j log(1 + s/λ_j)` for `Im s > 0`, `φ'` and `φ''`, and

@@ -1,7 +1,15 @@
 //! Step planning: the integrand's singularities nearest to the real `w` axis, the error they
 //! predict for the trapezoidal rule, and the step at which that error is below the target.
 
-use super::*;
+use super::problem::Contour;
+use std::f64::consts::PI;
+
+/// Largest coarsest step of the production schedule.
+pub(super) const H_COARSE: f64 = 0.5;
+/// The step is chosen such that every singularity's predicted error term is below
+/// `e^{−LN_TARGET}` (3e-17), below what the acceptance test [`TOL`](super::TOL) demands (so that
+/// the test passes at the planned level).
+const LN_TARGET: f64 = 38.0;
 
 impl Contour {
     /// `Re φ(s)` at a real `s` in a gap between two `−λ_j` (one logarithm of a rescaled product).

@@ -1,6 +1,7 @@
-//! The options and the report of the nonlinear steps ([`super::BinghamFilter::update_nonlinear_opts`],
-//! [`super::BinghamFilter::predict_nonlinear_opts`]): a tolerance on the error estimate, a
-//! budget of callback calls, and what a step measured.
+//! The options and the report of the nonlinear steps
+//! ([`BinghamFilter::update_nonlinear_opts`](crate::filter::BinghamFilter::update_nonlinear_opts),
+//! [`BinghamFilter::predict_nonlinear_opts`](crate::filter::BinghamFilter::predict_nonlinear_opts)):
+//! a tolerance on the error estimate, a budget of callback calls, and what a step measured.
 
 use crate::error::{Error, Result};
 
@@ -34,7 +35,10 @@ pub struct NonlinearOptions {
     /// The largest accepted error estimate (absolute) of any entry of the result's second
     /// moment `E[x xᵀ]` (before the prediction's noise is composed in); non-negative and
     /// finite, 0 = the step's default ([`DEFAULT_PREDICT_TOLERANCE`],
-    /// [`DEFAULT_UPDATE_TOLERANCE`]).
+    /// [`DEFAULT_UPDATE_TOLERANCE`]). The estimate is statistical, not a bound: three
+    /// standard errors of the sampled estimate (or, for a prediction the deterministic points
+    /// settle, the difference of their two rules); the error exceeds it rarely, not never.
+    /// The method: `docs/design.md`, section "Nonlinear steps".
     pub tolerance: f64,
     /// Update only: the largest accepted error estimate of the posterior mode as a fraction of
     /// the posterior's spread `√(1 − λ_max(E[x xᵀ]))` (both as the chord between unit
@@ -97,8 +101,9 @@ pub enum NonlinearMethod {
     /// is below a tenth of the tolerance (a margin: the difference is an estimate, not a
     /// bound). Exact models (the identity, a rotation) take this path at no extra cost.
     Deterministic,
-    /// Randomized quasi-Monte Carlo over the deterministic result's envelope; the error
-    /// estimate is 3 standard errors from 16 independent randomizations.
+    /// Randomized quasi-Monte Carlo over the deterministic result's envelope (the update
+    /// always, the prediction where the deterministic points' estimate asks for it); the error
+    /// estimate is three standard errors of the sampled estimate.
     Sampled,
 }
 

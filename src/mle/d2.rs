@@ -1,8 +1,7 @@
 //! The d = 2 moment equation `ω_1([x, 0]) = r`, solved in closed-form steps ([`pair_solve`]):
 //! the MLE's d = 2 case ([`newton_pair`]) and the pair problems of the d ≥ 3 cold start.
 
-use super::newton::NewtonStart;
-use super::MLE_TOL;
+use super::solution::{NewtonStart, MLE_TOL};
 use crate::error::{Error, Result};
 use crate::normalization::d2::pair_moments;
 

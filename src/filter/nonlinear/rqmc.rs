@@ -1,5 +1,5 @@
 //! Randomized quasi-Monte Carlo (RQMC) integration against a Bingham distribution: the error
-//! estimate and the refinement of the nonlinear steps ([`super::nonlinear`]).
+//! estimate and the refinement of the nonlinear steps ([`super::sampled`]).
 //!
 //! Points: the first `n` points of a Sobol sequence (32-bit, Gray-code order, Joe & Kuo's
 //! direction numbers for the first three dimensions), in [`REPLICATES`] copies, each XORed with
@@ -18,8 +18,8 @@
 
 #![allow(clippy::needless_range_loop)] // small dense sums over parallel arrays
 
-use super::{Mat, Vect};
 use crate::error::{Error, Result};
+use crate::filter::types::{Mat, Vect};
 
 /// Independent randomizations of the point set (the error estimate's degrees of freedom + 1).
 pub(crate) const REPLICATES: usize = 16;

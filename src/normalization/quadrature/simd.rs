@@ -4,8 +4,11 @@
 //! features that run-time detection ([`Path::available`]) has found. `tests/layering.rs` keeps it
 //! that way.
 
+use super::groups::Group;
 use super::kernel::{half, HalfSetup, Sums};
-use super::*;
+use super::kernel_path::Path;
+use super::rule::Rule;
+use crate::special::lanes::{Arith, Fused, Plain};
 
 /// [`half`] for the group sizes and moments asked for, with arithmetic `A` on `L` lanes.
 #[inline(always)]

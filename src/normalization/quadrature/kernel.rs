@@ -3,7 +3,9 @@
 //! lane sums of `F`, ω and (on request) the fourth moments. Generic over the arithmetic
 //! (plain or fused multiply-add) and the lane count; `simd` instantiates it per CPU path.
 
-use super::*;
+use super::groups::{Group, Scaling};
+use super::rule::{Layout, Panels, Rule};
+use crate::special::lanes::{Arith, F};
 
 /// Accumulated scaled integrals: `f = ∫ g1 g2`, `m[k] = ∫ g·E[x_k²]`,
 /// `q[k][l] = ∫ g·E[x_k² x_l²]`, each times the half's factors (`C1 C2`, and `D_k`, `D_k D_l`).

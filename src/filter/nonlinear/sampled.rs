@@ -12,20 +12,22 @@
 //! - **Prediction**: the second moment of `a(x)` under the state by importance sampling from the
 //!   state's envelope.
 //!
-//! In both, the points per replicate double until `3 × standard error ≤ tolerance`.
+//! In both, the points per replicate double until `3 × standard error ≤ tolerance`. The method
+//! with its derivation: `docs/design.md`, section "Nonlinear steps".
 
 use super::control_variate::{Features, PooledSums, ReplicateSums, MAX_FEATURES};
-use super::noise::capped;
-use super::nonlinear_options::{
+use super::options::{
     NonlinearMethod, NonlinearOptions, NonlinearReport, DEFAULT_PREDICT_TOLERANCE,
     DEFAULT_UPDATE_TOLERANCE,
 };
 use super::rqmc::{
     mean_and_error, outer_packed, packed, shifts, unpack, Acg, Sobol, WeightedSums, REPLICATES,
 };
-use super::{Core, Mat, Vect, MAX_CONCENTRATION};
 use crate::distribution::omega;
 use crate::error::{Error, Result};
+use crate::filter::noise::capped;
+use crate::filter::state::Core;
+use crate::filter::types::{Mat, Vect, MAX_CONCENTRATION};
 use crate::linalg::congruence;
 use crate::mle::fit_second_moment;
 

@@ -4,8 +4,8 @@
 
 use nalgebra::Const;
 
-use super::noise::{capped, NoiseCache, Role};
-use super::{Mat, Noise, Vect};
+use super::noise::{capped, Noise, NoiseCache, Role};
+use super::types::{Mat, Vect};
 use crate::canonical::{params_row_major, unit};
 use crate::distribution::{bayes_product, log_f_omega, omega, product_eigen_precision};
 use crate::error::{Error, Result};
@@ -161,28 +161,28 @@ impl<const D: usize> Core<D> {
 
 impl Core<4> {
     /// The mode (the last column of `M`) as a quaternion, scalar first.
-    pub(crate) fn mode4(&self) -> [f64; 4] {
+    pub(crate) fn mode(&self) -> [f64; 4] {
         let mode = self.m.column(3);
         [mode[0], mode[1], mode[2], mode[3]]
     }
 
     /// The principal directions (`M`, columns; the last is the mode) and concentrations (`z`,
     /// ascending, last 0).
-    pub(crate) fn params4(&self) -> (&Mat<4>, &Vect<4>) {
+    pub(crate) fn params(&self) -> (&Mat<4>, &Vect<4>) {
         (&self.m, &self.z)
     }
 
     /// The exact rotation `x ← x ⊕ u` (`u` unit): `M ← R(u) M`, `z` unchanged. No moment
     /// matching, no failure; the warm start of the next prediction stays valid (it depends on
     /// `z` only).
-    pub(crate) fn rotate4(&mut self, u: &[f64; 4]) {
+    pub(crate) fn rotate(&mut self, u: &[f64; 4]) {
         self.m = right(Const::<4>, u) * self.m;
     }
 
     /// Prediction `x ← x ⊕ w` by a noise `w` given by its second moment `s` (symmetric, trace
     /// 1), with `w_state = omega(z)` of the current state supplied by the caller (who caches it
     /// with the spread). The state is assigned only on success.
-    pub(crate) fn compose_moment4(&mut self, w_state: &Vect<4>, s: &Mat<4>) -> Result<()> {
+    pub(crate) fn compose_moment(&mut self, w_state: &Vect<4>, s: &Mat<4>) -> Result<()> {
         let a = congruence(&self.m, w_state);
         let c = compose_moments(&a, s);
         let (m, z, solution) = fit_second_moment(&c, self.predicted.as_ref())?;
@@ -193,13 +193,13 @@ impl Core<4> {
     }
 
     /// `omega(z)` (the second moments along the principal directions; concentrations capped
-    /// as in the prediction): what [`Self::compose_moment4`] and the spread need.
-    pub(crate) fn omega4(&self) -> Result<Vect<4>> {
+    /// as in the prediction): what [`Self::compose_moment`] and the spread need.
+    pub(crate) fn omega(&self) -> Result<Vect<4>> {
         omega(&capped(&self.z))
     }
 
     /// The part of the state a failed multi-step sample must restore (`M`, `z`, warm start).
-    pub(crate) fn save4(&self) -> Saved4 {
+    pub(crate) fn save(&self) -> Saved4 {
         Saved4 {
             m: self.m,
             z: self.z,
@@ -207,15 +207,15 @@ impl Core<4> {
         }
     }
 
-    /// Restores what [`Self::save4`] saved.
-    pub(crate) fn restore4(&mut self, s: Saved4) {
+    /// Restores what [`Self::save`] saved.
+    pub(crate) fn restore(&mut self, s: Saved4) {
         self.m = s.m;
         self.z = s.z;
         self.predicted = s.predicted;
     }
 }
 
-/// A saved d = 4 state (see [`Core::save4`]).
+/// A saved d = 4 state (see [`Core::save`]).
 #[derive(Debug, Clone)]
 pub(crate) struct Saved4 {
     m: Mat<4>,

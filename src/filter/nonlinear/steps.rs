@@ -1,18 +1,22 @@
 //! The nonlinear steps: prediction through a transition callback at the deterministic points
 //! of the state, and the update with a log-likelihood callback by progressive (tempered)
-//! linearization and importance correction (see [`super::BinghamFilter::update_nonlinear`]).
+//! linearization and importance correction (see
+//! [`BinghamFilter::update_nonlinear`](crate::filter::BinghamFilter::update_nonlinear)); both
+//! hand over to `sampled` where the deterministic points do not meet the tolerance. The
+//! method: `docs/design.md`, section "Nonlinear steps".
 
-use super::noise::{capped, Role};
-use super::nonlinear_options::{
+use super::options::{
     NonlinearMethod, NonlinearOptions, NonlinearReport, DEFAULT_PREDICT_TOLERANCE,
 };
-use super::{Core, Mat, Vect, MAX_CONCENTRATION};
 use crate::canonical::UNIT_TOL;
 use crate::deterministic::{
     for_each_point, for_each_principal, for_each_probe, plan, Reproduced, Scheme,
 };
 use crate::distribution::bayes_product;
 use crate::error::{Error, Result};
+use crate::filter::noise::{capped, Role};
+use crate::filter::state::Core;
+use crate::filter::types::{Mat, Vect, MAX_CONCENTRATION};
 use crate::linalg::cholesky_solve;
 use crate::linalg::congruence;
 use crate::mle::fit_second_moment;
@@ -20,19 +24,22 @@ use crate::quaternion::compose_moments;
 
 /// The largest part of `log L` not captured by the fitted exponent (its largest residual over
 /// the current deterministic points) one tempering step of
-/// [`BinghamFilter::update_nonlinear`] applies: a step applies `L^{Δβ}` with
-/// `Δβ · residual ≤ TEMPERING_RESIDUAL`.
+/// [`BinghamFilter::update_nonlinear`](crate::filter::BinghamFilter::update_nonlinear)
+/// applies: a step applies `L^{Δβ}` with `Δβ · residual ≤ TEMPERING_RESIDUAL`.
 pub const TEMPERING_RESIDUAL: f64 = 1.0;
 
-/// Importance-corrected moment matches at the end of [`BinghamFilter::update_nonlinear`].
+/// Importance-corrected moment matches at the end of
+/// [`BinghamFilter::update_nonlinear`](crate::filter::BinghamFilter::update_nonlinear).
 pub const CORRECTION_PASSES: usize = 2;
 
-/// The importance correction of [`BinghamFilter::update_nonlinear`] is skipped when its
-/// weights' effective share `(Σ w r)² / (Σ w · Σ w r²)` falls below this (the approximation is
-/// then too far from the posterior for the points to correct it).
+/// The importance correction of
+/// [`BinghamFilter::update_nonlinear`](crate::filter::BinghamFilter::update_nonlinear) is skipped
+/// when its weights' effective share `(Σ w r)² / (Σ w · Σ w r²)` falls below this (the
+/// approximation is then too far from the posterior for the points to correct it).
 pub const MIN_CORRECTION_SHARE: f64 = 0.5;
 
-/// The most tempering steps [`BinghamFilter::update_nonlinear`] takes.
+/// The most tempering steps
+/// [`BinghamFilter::update_nonlinear`](crate::filter::BinghamFilter::update_nonlinear) takes.
 pub const MAX_TEMPERING_STEPS: usize = 200;
 
 /// The most deterministic points a filter step uses (the Moments scheme for d = 4).
@@ -203,7 +210,7 @@ impl<const D: usize> Core<D> {
         Ok(())
     }
 
-    pub(super) fn predict_nonlinear<F>(
+    pub(in crate::filter) fn predict_nonlinear<F>(
         &mut self,
         a: &mut F,
         m_w: &[f64],
@@ -491,8 +498,9 @@ impl<const D: usize> Core<D> {
     }
 
     /// The nonlinear update with its error controlled by `opts` (see
-    /// [`super::BinghamFilter::update_nonlinear_opts`]); the state changes only on success.
-    pub(super) fn update_nonlinear<L>(
+    /// [`BinghamFilter::update_nonlinear_opts`](crate::filter::BinghamFilter::update_nonlinear_opts));
+    /// the state changes only on success.
+    pub(in crate::filter) fn update_nonlinear<L>(
         &mut self,
         log_l: &mut L,
         opts: &NonlinearOptions,
