@@ -706,7 +706,7 @@ enum bingham_status bingham_normalization_constant(size_t d,
  * - `d`: dimension, 2..64.
  * - `z`: the d concentrations, any order and shift, all finite.
  * - `log_f`: receives log F(Z).
- * - `dlog_f`: `NULL`, or receives ∂ log F/∂z_i = E[x_i²] (in the principal frame), in the order
+ * - `dlog_f`: `NULL`, or receives ∂ log F/∂z_i = `E[x_i²]` (in the principal frame), in the order
  *   of the input `z`; these are the eigenvalues ω_i of the second moment and sum to 1.
  *
  * Errors: `BINGHAM_ERR_INVALID_DIMENSION`, `BINGHAM_ERR_NULL_ARGUMENT` (`z`, `log_f`),
@@ -812,7 +812,7 @@ enum bingham_status bingham_mle_samples(size_t d,
                                         double *z);
 
 /**
- * The second moment `S = E[x xᵀ] = M diag(ω) Mᵀ` of Bingham(M, Z) (the covariance, as E[x] = 0),
+ * The second moment `S = E[x xᵀ] = M diag(ω) Mᵀ` of Bingham(M, Z) (the covariance, as `E[x] = 0`),
  * with ω_i = ∂ log F/∂z_i; trace S = 1.
  *
  * - `d`: 2..64.

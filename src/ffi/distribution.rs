@@ -11,7 +11,7 @@ use super::guard::{dim, guard, len2, Failure, FfiResult};
 use super::status::bingham_status;
 use crate::distribution::Bingham;
 
-/// The second moment `S = E[x xᵀ] = M diag(ω) Mᵀ` of Bingham(M, Z) (the covariance, as E[x] = 0),
+/// The second moment `S = E[x xᵀ] = M diag(ω) Mᵀ` of Bingham(M, Z) (the covariance, as `E[x] = 0`),
 /// with ω_i = ∂ log F/∂z_i; trace S = 1.
 ///
 /// - `d`: 2..64.

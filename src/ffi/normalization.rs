@@ -100,7 +100,7 @@ pub unsafe extern "C" fn bingham_normalization_constant(
 /// - `d`: dimension, 2..64.
 /// - `z`: the d concentrations, any order and shift, all finite.
 /// - `log_f`: receives log F(Z).
-/// - `dlog_f`: `NULL`, or receives ∂ log F/∂z_i = E[x_i²] (in the principal frame), in the order
+/// - `dlog_f`: `NULL`, or receives ∂ log F/∂z_i = `E[x_i²]` (in the principal frame), in the order
 ///   of the input `z`; these are the eigenvalues ω_i of the second moment and sum to 1.
 ///
 /// Errors: `BINGHAM_ERR_INVALID_DIMENSION`, `BINGHAM_ERR_NULL_ARGUMENT` (`z`, `log_f`),

@@ -20,19 +20,19 @@ use crate::quaternion::compose_moments;
 
 /// The largest part of `log L` not captured by the fitted exponent (its largest residual over
 /// the current deterministic points) one tempering step of
-/// [`BinghamFilter::update_nonlinear`] applies: a step applies `L^{Δβ}` with
+/// [`BinghamFilter::update_nonlinear`](crate::filter::BinghamFilter::update_nonlinear) applies: a step applies `L^{Δβ}` with
 /// `Δβ · residual ≤ TEMPERING_RESIDUAL`.
 pub const TEMPERING_RESIDUAL: f64 = 1.0;
 
-/// Importance-corrected moment matches at the end of [`BinghamFilter::update_nonlinear`].
+/// Importance-corrected moment matches at the end of [`BinghamFilter::update_nonlinear`](crate::filter::BinghamFilter::update_nonlinear).
 pub const CORRECTION_PASSES: usize = 2;
 
-/// The importance correction of [`BinghamFilter::update_nonlinear`] is skipped when its
+/// The importance correction of [`BinghamFilter::update_nonlinear`](crate::filter::BinghamFilter::update_nonlinear) is skipped when its
 /// weights' effective share `(Σ w r)² / (Σ w · Σ w r²)` falls below this (the approximation is
 /// then too far from the posterior for the points to correct it).
 pub const MIN_CORRECTION_SHARE: f64 = 0.5;
 
-/// The most tempering steps [`BinghamFilter::update_nonlinear`] takes.
+/// The most tempering steps [`BinghamFilter::update_nonlinear`](crate::filter::BinghamFilter::update_nonlinear) takes.
 pub const MAX_TEMPERING_STEPS: usize = 200;
 
 /// The most deterministic points a filter step uses (the Moments scheme for d = 4).

@@ -30,7 +30,7 @@ pub(crate) fn jacobi_eigen(a: &DMatrix<f64>) -> (DVector<f64>, DMatrix<f64>) {
 /// (n, the eigenvalues, not sorted), `work` (2n scratch; only n ≥ 5 uses it).
 ///
 /// n = 2 is one rotation in closed form (the general path's rotation by the short-chain
-/// formulas of n = 3, 4: the same eigenpairs within 2 ulps); n = 3, 4 go to [`jacobi_small`], n ≥ 5 to [`jacobi_general`]. The paths have the same
+/// formulas of n = 3, 4: the same eigenpairs within 2 ulps); n = 3, 4 go to `jacobi_small`, n ≥ 5 to [`jacobi_general`]. The paths have the same
 /// accuracy: orthogonality and reconstruction to a few ulps of ‖A‖, eigenvalues of graded
 /// matrices (`A = D·H·D`, H well conditioned) to a few ulps relative.
 ///

@@ -11,7 +11,7 @@
 //! `Const<4>`, warm-started from the previous prediction's solution and derivatives) both call
 //! `fit_second_moment`. The composition [`Bingham::compose`] (moment matching) lives here too.
 //!
-//! Files: this one holds the public fitting API and the solution type ([`Derivs`]); `newton`
+//! Files: this one holds the public fitting API and the solution type (`Derivs`); `newton`
 //! the Newton iteration for d ≥ 3 with its starts; `asymptotic` the series of the moment map
 //! for concentrated Binghams that corrects its steps (d = 3, 4); `pair` the closed-form d = 2
 //! solver.
