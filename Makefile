@@ -4,14 +4,20 @@
 #   make broad                   the AHRS vs VQF/Madgwick/Mahony on the BROAD trials (BROAD_DIR), then
 #                                the simulated-IMU suite with known truth (examples/python/ahrs_suite.py)
 #   make venv                    the Python package (pip install ./python) in $(TARGET_DIR)/venv
-#   make test                    everything CI runs (installs missing tools first, see `deps`)
-#   make sanitize                C/C++ tests and examples under ASan + UBSan + LSan (in `test`)
+#   make test                    everything CI runs: `deps`, then `quick`, then `slow` (docs/testing.md)
+#   make quick                   the quick tier (about 2 min on 2 cores once built): the test lists'
+#                                check, format, clippy, rustdoc, header drift, API coverage, unit
+#                                tests, the C/C++ API programs
+#   make slow                    the slow tier: install test, Python package, sanitizers, the fuzz
+#                                run, long runs, totality, the paper reproductions
+#   make sanitize                C/C++ tests and examples under ASan + UBSan + LSan (in `slow`)
 #   make valgrind                the same programs and the C ABI fuzz harness under valgrind
 #   make fuzz                    long reliability runs: 10^7 fuzz cases, 10^6 filter steps
 #   make install PREFIX=/opt/x   shared + static library (debug info stripped; STRIP= keeps it), headers,
 #                                pkg-config file, CMake package
 #   make header                  regenerate include/bingham.h from src/ffi/ (commit the result)
 #
+# One test binary: cargo test --release --test <name> (the tiers' lists: QUICK_TESTS, SLOW_TESTS).
 # Uses cargo's default target directory (target/), or CARGO_TARGET_DIR if set.
 
 SHELL := /bin/bash
@@ -55,8 +61,9 @@ EIGEN3_INCLUDE_DIR ?= /usr/include/eigen3
 VENV := $(abspath $(TARGET_DIR))/venv
 VENV_PYTHON := $(VENV)/bin/python
 
-.PHONY: build header demo demo-programs broad venv test deps fmt-check clippy rust-test python-test install install-test \
-        uninstall clean sanitize valgrind fuzz long
+.PHONY: build header demo demo-programs broad venv test quick slow deps tiers fmt-check clippy doc quick-build \
+        api-test unit-test c-test slow-test rust-test python-test install install-test uninstall clean \
+        sanitize valgrind fuzz long
 
 build:
 	$(CARGO) build --release --lib
@@ -114,14 +121,51 @@ broad: venv
 	$(VENV_PYTHON) examples/python/ahrs_suite.py --json $(TARGET_DIR)/ahrs_suite.json
 
 # --- tests ---------------------------------------------------------------------------------
+#
+# `make test` = `make quick` then `make slow` (docs/testing.md: the steps, their times, how to run
+# one tier or one test). Every integration test binary (tests/<name>.rs, tests/<name>/main.rs)
+# is named in exactly one of the lists below; `make tiers` (the first step of `quick`) fails
+# otherwise, so a new test file cannot escape both tiers.
 
-test: deps fmt-check clippy build rust-test python-test install-test sanitize
+# The API coverage test (every export against its mirrors) is written on another branch: named
+# here, run in the quick tier once tests/api_mirrors.rs exists.
+API_MIRRORS := $(if $(wildcard tests/api_mirrors.rs),api_mirrors)
+# Run first in the quick tier: the header drift check and the API coverage test.
+API_TESTS := header $(API_MIRRORS)
+# The quick tier's other binaries (with the library's unit tests, `--lib`), then the C/C++
+# programs (c_tests, last: it compiles C++ with Eigen when its sources or headers changed).
+UNIT_TESTS := ahrs ahrs_latency deterministic dispatch distribution filter filter_alloc \
+              filter_health general_d layering mle nonlinear normalization observation q4 \
+              saddlepoint special speed_figures spin threads world
+C_TESTS := c_tests
+QUICK_TESTS := $(API_TESTS) $(UNIT_TESTS) $(C_TESTS)
+# The slow tier's binaries: the C ABI fuzz run, the long runs, the totality sweep, the paper
+# reproductions, issue 21's acceptance run (10^6 importance draws per problem).
+SLOW_TESTS := fuzz_ffi long_run totality glover_composition_kl glover_spin glover_spin_failures \
+              glover_table1 nonlinear_trust
+# `cargo test` with a list of binaries; --no-fail-fast: a failing binary does not hide the others.
+CARGO_TEST := $(CARGO) test --release --no-fail-fast
+
+test: deps quick slow
 	@echo "make test: all passed"
+
+# The quick tier (about 2 min on 2 cores once built, docs/testing.md): the tier lists, format,
+# clippy, rustdoc, the header drift and API coverage tests, the unit tests, the C/C++ programs.
+quick: deps tiers fmt-check clippy doc quick-build api-test unit-test c-test
+	@echo "make quick: all passed"
+
+# The slow tier, shortest step first: the install test, the Python package, the C/C++ programs
+# under the sanitizers, the slow Rust tests.
+slow: build install-test python-test sanitize slow-test
+	@echo "make slow: all passed"
 
 # Installs what the tests need when it is missing (Debian/Ubuntu): a C++ compiler, Eigen,
 # pkg-config, binutils, python3-venv, and NumPy/pytest for the Python package.
 deps:
 	@PYTHON="$(PYTHON)" CXX="$(CXX)" scripts/install-deps.sh
+
+tiers:
+	@scripts/check-tiers.sh "$(QUICK_TESTS)" "$(SLOW_TESTS)"
 
 fmt-check:
 	$(CARGO) fmt --all --check
@@ -129,9 +173,34 @@ fmt-check:
 clippy:
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
 
-# The Rust tests, the C/C++ tests (tests/c_tests.rs) and the header check (tests/header.rs).
+# The API documentation with rustdoc's warnings (broken intra-doc links, bad HTML, ...) as errors.
+doc:
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps
+
+# Builds every binary of the quick tier in one cargo run (cargo compiles the library and its
+# unit tests in parallel), so the steps below only run tests.
+quick-build:
+	$(CARGO) test --release --no-run --lib $(addprefix --test ,$(QUICK_TESTS))
+
+api-test:
+	$(CARGO_TEST) $(addprefix --test ,$(API_TESTS))
+
+# The library's unit tests, its doc tests and the quick integration binaries.
+unit-test:
+	$(CARGO_TEST) --lib $(addprefix --test ,$(UNIT_TESTS))
+	$(CARGO_TEST) --doc
+
+# The C/C++ programs of c_tests/ against the library (tests/c_tests.rs).
+c-test:
+	$(CARGO_TEST) $(addprefix --test ,$(C_TESTS))
+
+slow-test:
+	$(CARGO_TEST) $(addprefix --test ,$(SLOW_TESTS))
+
+# Every Rust test in one cargo run (both tiers' binaries, unit and doc tests), without the
+# other steps.
 rust-test:
-	$(CARGO) test --release --no-fail-fast
+	$(CARGO_TEST)
 
 # The pytest suite (python/tests/) run by the venv's Python against the INSTALLED package (from
 # python/tests/, so the checkout's python/bingham/ is not on the path; BINGHAM_LIB unset, so the

@@ -21,11 +21,14 @@ command -v "$python" >/dev/null 2>&1 || missing+=(python3)
 if ! "$python" -c 'import numpy, pytest, vqf, ahrs' >/dev/null 2>&1 && ! "$python" -m pip --version >/dev/null 2>&1; then
     missing+=(python3-pip)
 fi
-# `python3 -m venv` needs ensurepip, which Debian ships separately (python3-venv)
+# `python3 -m venv` needs ensurepip, which Debian ships separately (python3-venv). A trial
+# venv (about 10 s: it installs pip) is made only when ensurepip cannot be imported.
 if command -v "$python" >/dev/null 2>&1; then
-    venv_probe=$(mktemp -d)
-    "$python" -m venv "$venv_probe/v" >/dev/null 2>&1 || missing+=(python3-venv)
-    rm -rf "$venv_probe"
+    if ! "$python" -c 'import ensurepip' >/dev/null 2>&1; then
+        venv_probe=$(mktemp -d)
+        "$python" -m venv "$venv_probe/v" >/dev/null 2>&1 || missing+=(python3-venv)
+        rm -rf "$venv_probe"
+    fi
 else
     missing+=(python3-venv)
 fi

@@ -8,6 +8,14 @@
 //! (`libeigen3-dev`, found in `/usr/include/eigen3` or via `EIGEN3_INCLUDE_DIR`).
 //!
 //! Every program counts its checks and exits non-zero on any failure; its output is shown.
+//!
+//! Each program is compiled to an object file, then linked against the library. Compiling the
+//! Eigen programs is most of this test's time (about 2 of its 2.5 minutes on 2 cores) and does
+//! not depend on the library, so an object is reused when nothing it was compiled from changed:
+//! the same compiler command and version, and every file the compiler read (its `-MD` list:
+//! the source, `include/`, `c_tests/`, Eigen's and the system's headers) of unchanged size and
+//! modification time ([`compile`]). Linking and running happen every time. Delete
+//! `target/<profile>/c_tests/` to compile everything again.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -92,7 +100,7 @@ enum Link {
     Shared,
 }
 
-/// Compiles `c_tests/<source>` to an executable named `<name>` and returns its path.
+/// Compiles `c_tests/<source>` and links it to an executable named `<name>`; returns its path.
 fn build(source: &str, name: &str, std: &str, extra: &[&str], link: Link) -> PathBuf {
     let cpp = source.ends_with(".cpp");
     let compiler = cc::Build::new()
@@ -108,18 +116,23 @@ fn build(source: &str, name: &str, std: &str, extra: &[&str], link: Link) -> Pat
         .try_get_compiler()
         .expect("find a C/C++ compiler");
     let exe = out_dir().join(name);
+    let obj = out_dir().join(format!("{name}.o"));
     let lib = lib_dir();
-    let mut cmd = compiler.to_command();
-    cmd.arg(format!("-std={std}"))
+    let mut cc = compiler.to_command();
+    cc.arg(format!("-std={std}"))
         .args(STRICT)
         .arg("-I")
         .arg(root().join("include"))
         .arg("-I")
         .arg(root().join("c_tests"))
         .args(extra)
+        .arg("-c")
         .arg(root().join("c_tests").join(source))
         .arg("-o")
-        .arg(&exe);
+        .arg(&obj);
+    compile(cc, &obj, source);
+    let mut cmd = compiler.to_command();
+    cmd.arg(&obj).arg("-o").arg(&exe);
     match link {
         // What `pkg-config --static --libs bingham` gives: the archive and Rust std's needs.
         Link::Static => {
@@ -144,19 +157,125 @@ fn build(source: &str, name: &str, std: &str, extra: &[&str], link: Link) -> Pat
                 .args(["-lbingham", "-lpthread", "-lm"]);
         }
     }
+    run_compiler(&mut cmd, &format!("linking {source}"));
+    exe
+}
+
+/// Runs a compiler command; panics with the command and its output if it fails.
+fn run_compiler(cmd: &mut Command, what: &str) {
     let output = cmd.output().expect("run the compiler");
-    let shown: Vec<_> = std::iter::once(cmd.get_program())
-        .chain(cmd.get_args())
-        .map(|a| a.to_string_lossy())
-        .collect();
     assert!(
         output.status.success(),
-        "compiling {source} failed:\n{}\n{}{}",
-        shown.join(" "),
+        "{what} failed:\n{}\n{}{}",
+        shown(cmd),
         String::from_utf8_lossy(&output.stdout),
         String::from_utf8_lossy(&output.stderr)
     );
-    exe
+}
+
+fn shown(cmd: &Command) -> String {
+    let words: Vec<_> = std::iter::once(cmd.get_program())
+        .chain(cmd.get_args())
+        .map(|a| a.to_string_lossy())
+        .collect();
+    words.join(" ")
+}
+
+/// Compiles with `cc` (a command ending in `-c <source> -o <obj>`) unless `obj` is still valid.
+///
+/// The key of an object, written to `<obj>.key` after a successful compilation: the command
+/// line, the compiler's `--version`, then one line per file the compiler read (from `-MD`),
+/// with its size and modification time. A compilation that failed leaves no key, so it is
+/// repeated (with its diagnostics) on the next run; a key that matches means the same command
+/// over the same files, which gave an object without a warning (`-Werror`) before.
+fn compile(mut cc: Command, obj: &Path, source: &str) {
+    let key_path = obj.with_extension("o.key");
+    let dep_path = obj.with_extension("d");
+    let version = Command::new(cc.get_program())
+        .arg("--version")
+        .output()
+        .map(|o| {
+            String::from_utf8_lossy(&o.stdout)
+                .lines()
+                .next()
+                .unwrap_or("")
+                .to_string()
+        })
+        .unwrap_or_default();
+    let head = format!("{}\n{version}\n", shown(&cc));
+    if obj.is_file() {
+        if let Ok(key) = std::fs::read_to_string(&key_path) {
+            if let Some(files) = key.strip_prefix(&head) {
+                let unchanged = files.lines().all(|line| {
+                    line.splitn(3, ' ')
+                        .nth(2)
+                        .and_then(|path| file_line(Path::new(path)))
+                        .is_some_and(|now| now == line)
+                });
+                if unchanged && !files.is_empty() {
+                    return;
+                }
+            }
+        }
+    }
+    let _ = std::fs::remove_file(&key_path);
+    cc.arg("-MD").arg("-MF").arg(&dep_path);
+    run_compiler(&mut cc, &format!("compiling {source}"));
+    let deps = std::fs::read_to_string(&dep_path).expect("read the compiler's -MD output");
+    let mut key = head;
+    for path in dep_files(&deps) {
+        let line = file_line(Path::new(&path))
+            .unwrap_or_else(|| panic!("{path} (read by the compiler) has no metadata"));
+        key.push_str(&line);
+        key.push('\n');
+    }
+    std::fs::write(&key_path, key).expect("write the object's key");
+}
+
+/// `<modification time in ns> <size> <path>` of a file, or `None` if it cannot be read.
+fn file_line(path: &Path) -> Option<String> {
+    let meta = std::fs::metadata(path).ok()?;
+    let modified = meta
+        .modified()
+        .ok()?
+        .duration_since(std::time::UNIX_EPOCH)
+        .ok()?;
+    Some(format!(
+        "{} {} {}",
+        modified.as_nanos(),
+        meta.len(),
+        path.display()
+    ))
+}
+
+/// The prerequisites of a make rule as the compiler writes it with `-MD` (`obj: a b \`, ...;
+/// a space in a name escaped as `\ `).
+fn dep_files(rule: &str) -> Vec<String> {
+    let body = rule.split_once(": ").map_or(rule, |(_, b)| b);
+    let mut files = Vec::new();
+    let mut word = String::new();
+    let mut chars = body.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '\\' if chars.peek() == Some(&' ') => {
+                word.push(' ');
+                chars.next();
+            }
+            '\\' if chars.peek() == Some(&'\n') => {
+                chars.next();
+            }
+            c if c.is_whitespace() => {
+                if !word.is_empty() {
+                    files.push(std::mem::take(&mut word));
+                }
+            }
+            c => word.push(c),
+        }
+    }
+    if !word.is_empty() {
+        files.push(word);
+    }
+    files
 }
 
 fn run(exe: &Path) {

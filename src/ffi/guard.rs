@@ -353,17 +353,13 @@ mod tests {
     fn last() -> String {
         let mut n = 0usize;
         // SAFETY: len == 0 with a NULL buffer is the documented length query.
-        assert_eq!(
-            unsafe { bingham_last_error_message(std::ptr::null_mut(), 0, &mut n) },
-            BINGHAM_OK
-        );
+        let st = unsafe { bingham_last_error_message(std::ptr::null_mut(), 0, &mut n) };
+        assert_eq!(st, BINGHAM_OK);
         let mut buf = vec![0 as c_char; n + 1];
         let mut n2 = 0usize;
         // SAFETY: buf has n + 1 writable bytes.
-        assert_eq!(
-            unsafe { bingham_last_error_message(buf.as_mut_ptr(), buf.len(), &mut n2) },
-            BINGHAM_OK
-        );
+        let st = unsafe { bingham_last_error_message(buf.as_mut_ptr(), buf.len(), &mut n2) };
+        assert_eq!(st, BINGHAM_OK);
         assert_eq!(n, n2);
         let bytes: Vec<u8> = buf[..n].iter().map(|&c| c as u8).collect();
         assert_eq!(buf[n], 0);
