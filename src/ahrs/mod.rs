@@ -124,6 +124,14 @@ struct SampleState {
     hold: GyroHold,
     /// Each sensor's missing time and its coverage of the correction period.
     times: SensorTimes,
+    /// The variance (rad² per axis) the current gyroscope gap has added by carrying the rate,
+    /// and whether a gap came in the current correction period (module `timing`).
+    gap_var: f64,
+    gap_in_period: bool,
+    /// The accelerometer's and the magnetometer's averages wait to be restarted by their next
+    /// sample: a gyroscope gap turned them with a carried rate by more than their own noise.
+    restart_acc: bool,
+    restart_mag: bool,
     /// `omega(z)` of the Bingham state (cached for the next composition and the spread).
     omega: [f64; 4],
     /// The running state of the health readout.
@@ -169,6 +177,10 @@ impl Ahrs {
                 mag: Magnetic::new(),
                 hold: GyroHold::default(),
                 times: SensorTimes::default(),
+                gap_var: 0.0,
+                gap_in_period: false,
+                restart_acc: false,
+                restart_mag: false,
                 omega: [0.25; 4],
                 health: HealthState::default(),
             },
@@ -560,6 +572,10 @@ impl Ahrs {
         self.s.mag = mag_state;
         self.s.hold = GyroHold::default();
         self.s.times = SensorTimes::default();
+        self.s.gap_var = 0.0;
+        self.s.gap_in_period = false;
+        self.s.restart_acc = false;
+        self.s.restart_mag = false;
         self.s.omega = [omega[0], omega[1], omega[2], omega[3]];
         self.s.bias.pending = Matrix3::zeros();
         self.samples = 1;
@@ -717,14 +733,18 @@ fn step(
     let repeat = (h / dt).round().clamp(1.0, 1e6) as u32;
 
     // A sensor back after a loss longer than its averaging time restarts its average: what
-    // the old one holds was turned by the gyroscope alone since (module `timing`).
+    // the old one holds was turned by the gyroscope alone since (module `timing`). So does a
+    // sensor whose average a gyroscope gap turned with a carried rate by more than the
+    // sensor's own noise.
     if let Some(a) = acc {
-        if s.times.acc_missing > p.acc_tau {
+        if s.times.acc_missing > p.acc_tau || s.restart_acc {
             s.acc_filter = InertialLowPass::new(c.acc, c.acc_warmup, a);
+            s.restart_acc = false;
         }
     }
-    if mag.is_some() && s.times.mag_missing > p.mag_tau {
+    if mag.is_some() && (s.times.mag_missing > p.mag_tau || s.restart_mag) {
         s.mag.restart_average();
+        s.restart_mag = false;
     }
 
     // 1. Rest detection and the bias at rest.
@@ -787,8 +807,24 @@ fn step(
         dq = q4::mul(&q4::from_rotation_vector(&scale3(&bridge, u)), &dq);
     }
     core.rotate4(&dq);
-    let uncovered = h - covered;
-    let extra = s.hold.extrapolation_variance(uncovered, held);
+    // The carried rate's error grows with the whole stretch without a gyroscope sample, not
+    // sample by sample: add what this step adds to the stretch's variance.
+    let extra = if held {
+        let gap = s.times.gyr_missing + h;
+        s.hold.extrapolation_variance(gap, true) - s.hold.extrapolation_variance(gap - h, true)
+    } else {
+        s.hold.extrapolation_variance(h - covered, false)
+    };
+    if held {
+        s.gap_var += extra;
+        s.gap_in_period = true;
+    } else if s.gap_var > 0.0 {
+        // the gap is over: the averages it turned by more than their noise restart
+        let turned = 3.0 * s.gap_var;
+        s.restart_acc |= turned > p.acc_noise * p.acc_noise;
+        s.restart_mag |= turned > p.mag_noise * p.mag_noise;
+        s.gap_var = 0.0;
+    }
     if let Some(g) = gyr {
         s.hold.push(&[g[0] - b[0], g[1] - b[1], g[2] - b[2]], h);
     }
@@ -927,8 +963,10 @@ fn correct(p: &AhrsParams, core: &mut Core<4>, s: &mut SampleState) -> Result<()
         Vector3::from(cross3(&up_post, &up_prior))
     };
     // At rest the gyroscope measures the bias directly (module `rest`), far better than the
-    // corrections can: they do not teach it then.
-    let learn = p.bias_time > 0.0 && s.rest_timer < p.rest_time;
+    // corrections can: they do not teach it then. Nor after a gyroscope gap in the period: the
+    // move of the mode then answers the carried rate's error, not the bias.
+    let learn = p.bias_time > 0.0 && s.rest_timer < p.rest_time && !s.gap_in_period;
+    s.gap_in_period = false;
     s.bias.correct(&lam_prior, &mu, &sigma_post, learn);
     s.bias.clip(p.bias_max);
 
