@@ -93,6 +93,9 @@ use vec3::{cross3, norm3, scale3};
 /// radians, far beyond any sensor, below where the increment's arithmetic loses meaning.
 pub const MAX_TURN: f64 = 1e6;
 
+/// The relative tolerance within which a sample's time step counts as the nominal period.
+const SNAP: f64 = 1e-6;
+
 /// The world's "up" (ENU).
 const UP: [f64; 3] = [0.0, 0.0, 1.0];
 
@@ -410,7 +413,9 @@ impl Ahrs {
 
     /// Processes one sample taken `dt` seconds after the previous one (its own time step:
     /// jitter, dropped packets; module `timing`): `gyr` (rad/s), `acc` (m/s²), `mag` (any unit,
-    /// or `None`). `dt` of the first sample is not used.
+    /// or `None`). `dt` of the first sample is not used; a `dt` within a millionth of
+    /// [`AhrsParams::sample_time`] is taken as it (so uniformly spaced timestamps give the
+    /// results of [`Ahrs::update`] bit for bit).
     ///
     /// Per channel, a non-finite (NaN/Inf) sample means "no sample" of that sensor: a missing
     /// gyroscope sample is a gap, turned with the last rate held and its uncertainty added to
@@ -447,6 +452,15 @@ impl Ahrs {
                  {MAX_STEP_TIME} s (seconds, not milliseconds)"
             )));
         }
+        // A step within a millionth of the nominal period is the nominal period: differences
+        // of uniformly spaced timestamps carry rounding, which should not make every sample
+        // take the path of an irregular one.
+        let nominal = self.params.sample_time;
+        let dt = if (dt - nominal).abs() <= SNAP * nominal {
+            nominal
+        } else {
+            dt
+        };
         let gyr = usable3(gyr).then_some(gyr);
         if let Some(g) = gyr {
             let turn = norm3(g) * dt;
@@ -478,7 +492,9 @@ impl Ahrs {
                 self.s = s;
                 // the latency estimate works on the raw samples at the nominal period
                 // (infallible, after the rest); a sample off the period is not one of them
-                if gyr.is_some() && (dt - self.params.sample_time).abs() <= 0.5 * self.params.sample_time {
+                if gyr.is_some()
+                    && (dt - self.params.sample_time).abs() <= 0.5 * self.params.sample_time
+                {
                     self.latency.push(&dq, if mag_used { mag } else { None });
                 }
                 self.samples += 1;

@@ -22,7 +22,6 @@
 
 use super::vec3::norm3;
 
-
 /// Time constant (s) of the running mean squares of the angular acceleration and of the rate
 /// that size the error of a rate carried over a gap (the motion's own time scale).
 const MOTION_TIME: f64 = 1.0;
@@ -148,10 +147,7 @@ mod tests {
         let u = 0.1;
         let v = g.extrapolation_variance(u, true);
         let expected = 0.5 * 2.0 * u * u;
-        assert!(
-            ((3.0 * v).sqrt() - expected).abs() < 1e-3 * expected,
-            "{v}"
-        );
+        assert!(((3.0 * v).sqrt() - expected).abs() < 1e-3 * expected, "{v}");
         // an interpolated stretch: half the error
         let vi = g.extrapolation_variance(u, false);
         assert!(((3.0 * vi).sqrt() - 0.5 * expected).abs() < 1e-3 * expected);
