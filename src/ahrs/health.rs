@@ -149,7 +149,8 @@ impl HealthState {
     /// One correction of period `t` (s) with the prior's body-frame precision `lam` (rad⁻²),
     /// the predicted body-frame up `b_hat` (unit), the observed one `b` (unit) with its
     /// angular variance `var_a` (rad², or `None` without a tilt observation), and the heading
-    /// error `delta` (rad) with its variance `var_m` (or `None`).
+    /// error `delta` (rad) with its variance `var_m` (or `None`). Returns the correction's
+    /// largest normalized innovation per degree of freedom (0 without an observation).
     pub(super) fn correction(
         &mut self,
         t: f64,
@@ -158,14 +159,15 @@ impl HealthState {
         tilt: Option<(&[f64; 3], f64)>,
         heading: Option<(f64, f64)>,
         gravity_excess: Option<f64>,
-    ) {
+    ) -> f64 {
         let alpha = (t / HEALTH_TIME).min(1.0);
         if let Some(x) = gravity_excess {
             self.gravity.push(x * x, alpha);
         }
         if tilt.is_none() && heading.is_none() {
-            return;
+            return 0.0;
         }
+        let mut largest = 0.0f64;
         // The state's covariance (rad², body frame; see `covariance`).
         let sigma = covariance(lam);
         let bh = Vector3::from(*b_hat);
@@ -182,13 +184,16 @@ impl HealthState {
             };
             let nis = tilt_nis(&sigma, &bh, &e, var_a);
             self.tilt.push(nis / 2.0, alpha);
+            largest = largest.max(nis / 2.0);
             self.tilt_innovation = angle;
         }
         if let Some((delta, var_m)) = heading {
             let var = (bh.transpose() * sigma * bh)[0].max(0.0) + var_m;
             self.heading.push(delta * delta / var, alpha);
             self.heading_innovation = delta;
+            largest = largest.max(delta * delta / var);
         }
+        largest
     }
 
     /// The readout, with the reference dip `dip_above` (rad above the horizon, as the

@@ -93,6 +93,17 @@ use vec3::{cross3, norm3, scale3};
 /// radians, far beyond any sensor, below where the increment's arithmetic loses meaning.
 pub const MAX_TURN: f64 = 1e6;
 
+/// A correction whose innovation exceeds this many of its predicted standard deviations (the
+/// health readout's normalized innovation per degree of freedom above its square) teaches the
+/// bias nothing (module `bias`: the coupling models small errors).
+const OUTLIER: f64 = 5.0;
+
+/// The largest move of the mode (rad) at a correction that teaches the bias: the coupling's
+/// first-order model (module `bias`) errs by the square of the angle, 1 % at 0.1 rad. A
+/// correction moves the mode by 1e-4 to 1e-2 rad in tracking; larger moves are recoveries
+/// (a wrong start, after a gap), not bias.
+const LINEAR_MOVE: f64 = 0.1;
+
 /// The relative tolerance within which a sample's time step counts as the nominal period.
 const SNAP: f64 = 1e-6;
 
@@ -945,7 +956,7 @@ fn correct(p: &AhrsParams, core: &mut Core<4>, s: &mut SampleState) -> Result<()
         evidence += heading_exponent(&q4::mul(&rz, &q_prior), kappa);
         observed = true;
     }
-    s.health.correction(
+    let innovation = s.health.correction(
         t,
         &lam_prior,
         &q4::rotate_inverse(&q_prior, &UP),
@@ -981,9 +992,30 @@ fn correct(p: &AhrsParams, core: &mut Core<4>, s: &mut SampleState) -> Result<()
     // At rest the gyroscope measures the bias directly (module `rest`), far better than the
     // corrections can: they do not teach it then. Nor after a gyroscope gap in the period: the
     // move of the mode then answers the carried rate's error, not the bias.
-    let learn = p.bias_time > 0.0 && s.rest_timer < p.rest_time && !s.gap_in_period;
+    // Nor from an innovation the prior calls impossible (beyond OUTLIER standard deviations:
+    // a start far off, a wrong state set): the coupling is a linear-Gaussian model of small
+    // errors, and read literally the moves that such an innovation makes are a bias of degrees
+    // per second.
+    // An innovation or a move larger than LINEAR_MOVE is beyond that model too, whatever the
+    // prior's spread: the state is recovering from a large error, not tracking a bias.
+    let up_prior_b = q4::rotate_inverse(&q_prior, &UP);
+    let tilt_angle = tilt.as_ref().map_or(0.0, |(b, _)| {
+        norm3(&cross3(b, &up_prior_b)).atan2(vec3::dot3(b, &up_prior_b))
+    });
+    let heading_angle = heading.map_or(0.0, f64::abs);
+    let recovering = s.gap_in_period
+        || innovation > OUTLIER * OUTLIER
+        || mu.norm() > LINEAR_MOVE
+        || tilt_angle.max(heading_angle) > LINEAR_MOVE;
+    let learn = p.bias_time > 0.0 && s.rest_timer < p.rest_time && !recovering;
     s.gap_in_period = false;
     s.bias.correct(&lam_prior, &mu, &sigma_post, learn);
+    if recovering {
+        // what the recovery taught the orientation is not evidence about the bias: the
+        // coupling starts afresh, so that the next correction does not read the recovery's
+        // moves as the effect of a bias
+        s.bias.c = Matrix3::zeros();
+    }
     s.bias.clip(p.bias_max);
 
     // The heading correction turns the field's average with it.
