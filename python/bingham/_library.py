@@ -160,7 +160,11 @@ def _candidates() -> Iterator[str]:
     found = ctypes.util.find_library("bingham")
     if found:
         yield found
-    yield "libbingham.so.0"
+    # the installed library's SONAME (`make install`): libbingham.so.<major>, before 1.0
+    # libbingham.so.0.<minor> (each 0.x minor version may change the ABI)
+    parts = _package_version().split(".")
+    if len(parts) >= 2 and parts[0].isdigit() and parts[1].isdigit():
+        yield f"libbingham.so.0.{parts[1]}" if parts[0] == "0" else f"libbingham.so.{parts[0]}"
 
 
 def _load() -> Tuple[ctypes.CDLL, str]:

@@ -300,7 +300,9 @@ impl Ahrs {
             return Ok(());
         };
         crate::observation::spread_from_omega(&self.s.omega, out);
-        let n = &self.s.bias.pending;
+        // the pending noise made positive semi-definite, as the next correction and the
+        // orientation covariance take it (the two readouts then agree: trace = spread²)
+        let n = &bias::psd(&self.s.bias.pending);
         if n.trace() > 0.0 {
             let core = f.core4()?;
             let (m, _) = core.params4();
@@ -457,25 +459,26 @@ impl Ahrs {
         acc: &[f64; 3],
         mag: Option<&[f64; 3]>,
     ) -> Result<()> {
-        if !(MIN_SAMPLE_TIME..=MAX_STEP_TIME).contains(&dt) {
-            return Err(Error::InvalidArgument(format!(
-                "the time step dt = {dt} s is not finite or outside {MIN_SAMPLE_TIME:e} to \
-                 {MAX_STEP_TIME} s (seconds, not milliseconds)"
-            )));
-        }
         // A step within a millionth of the nominal period is the nominal period: differences
         // of uniformly spaced timestamps carry rounding, which should not make every sample
-        // take the path of an irregular one.
+        // take the path of an irregular one (nor be refused at the smallest period).
         let nominal = self.params.sample_time;
         let dt = if (dt - nominal).abs() <= SNAP * nominal {
             nominal
         } else {
             dt
         };
-        let gyr = usable3(gyr).then_some(gyr);
+        if !(MIN_SAMPLE_TIME..=MAX_STEP_TIME).contains(&dt) {
+            return Err(Error::InvalidArgument(format!(
+                "the time step dt = {dt} s is not finite or outside {MIN_SAMPLE_TIME:e} to \
+                 {MAX_STEP_TIME} s (seconds, not milliseconds)"
+            )));
+        }
+        // a finite rate whose norm overflows is no gap: it turns far more than MAX_TURN
+        let gyr = gyr.iter().all(|x| x.is_finite()).then_some(gyr);
         if let Some(g) = gyr {
             let turn = norm3(g) * dt;
-            if turn > MAX_TURN {
+            if !turn.is_finite() || turn > MAX_TURN {
                 return Err(Error::InvalidArgument(format!(
                     "the gyroscope sample turns by |gyr|·dt = {turn:e} rad, more than \
                      {MAX_TURN:e} rad in one sample: not a rotation rate"
