@@ -1844,7 +1844,9 @@ enum bingham_status bingham_ahrs_update(struct bingham_ahrs *a,
  * turn, the process noise, the bias's random walk and the filters' time constants use `dt`;
  * a gyroscope sample is taken to cover one `sample_time`, and a longer interval's remainder
  * (dropped samples) is bridged with the mean of the last and this rate, its uncertainty added
- * to the spread. `dt` of the very first sample is not used.
+ * to the spread. `dt` of the very first sample is not used; a `dt` within a millionth of
+ * `sample_time` is taken as `sample_time` (uniformly spaced timestamps then give the results of
+ * `bingham_ahrs_update()` bit for bit).
  *
  * Errors: those of `bingham_ahrs_update()`, and `BINGHAM_ERR_INVALID_ARGUMENT` for `dt` not
  * finite or outside `BINGHAM_AHRS_MIN_SAMPLE_TIME` (1e-6 s) to `BINGHAM_AHRS_MAX_STEP_TIME`
