@@ -514,8 +514,8 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                     };
                     arr[3 * k + rng.below(3)] = non_finite(&mut rng);
                 }
-                // a huge gyroscope row: refused if it turns by more than 1e6 rad, a gap if its
-                // norm overflows, else used
+                // a huge gyroscope row: refused if it turns by more than 1e6 rad (its norm
+                // overflowing included), else used
                 let mut huge = None;
                 if n > 0 && rng.chance(0.1) {
                     let k = rng.below(n);

@@ -33,10 +33,10 @@ pub(crate) enum Gyro {
     /// a rate, used
     Usable,
     /// "no gyroscope sample" (a gap the AHRS carries the orientation through): a NaN/±Inf
-    /// entry, or entries so large that the vector's norm overflows (the library counts such a
-    /// vector as no sample, src/ahrs: `usable3`)
+    /// entry
     Gap,
-    /// refused: finite, turning by more than [`MAX_TURN`] rad in `h`
+    /// refused: finite, turning by more than [`MAX_TURN`] rad in `h` (entries so large that
+    /// the vector's norm overflows included)
     Refused,
     /// within rounding of the limit (the library's step may be `h` snapped to the nominal
     /// period): either
@@ -45,13 +45,13 @@ pub(crate) enum Gyro {
 
 pub(crate) fn gyro_kind(g: &[f64], h: f64) -> Gyro {
     let n = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
-    if g.iter().any(|v| !v.is_finite()) || !n.is_finite() {
+    if g.iter().any(|v| !v.is_finite()) {
         return Gyro::Gap;
     }
     let turn = n * h;
     if (turn - MAX_TURN).abs() <= 1e-5 * MAX_TURN {
         Gyro::Ambiguous
-    } else if turn > MAX_TURN {
+    } else if !turn.is_finite() || turn > MAX_TURN {
         Gyro::Refused
     } else {
         Gyro::Usable
@@ -72,7 +72,7 @@ pub(crate) fn ahrs_health(a: *const bingham_ahrs) -> Result<bingham_ahrs_health_
 /// Everything the getters show, as bits: q (4), M (16), z (4), bias (3), spread (4), the bias
 /// covariance (9: finite, symmetric to 1e-12 of its largest variance, diagonal ≥ 0), the
 /// orientation covariance (9: finite, symmetric to 1e-14 of its trace, diagonal ≥ 0, 2×2
-/// principal minors ≥ 0 up to rounding, the trace at least the square of the total spread,
+/// principal minors ≥ 0 up to rounding, the trace the square of the total spread,
 /// within 1e-12 relative), the health readout (its 11 doubles, finite, the missing times ≥ 0, and the
 /// reference flag), and the magnetometer latency estimate (status, value: OK with a finite
 /// value ≥ 0, or NOT_CONVERGED with the output untouched).
@@ -131,12 +131,9 @@ pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
             "bias covariance {c:?} (scale {scale:e}): not finite, symmetric, diagonal ≥ 0"
         ));
     }
-    // The header states trace == spread[3]² (to rounding); c_tests/ahrs_api.c checks that on
-    // ordinary streams. Here only trace ≥ spread[3]² is required: after a step with strong
-    // coupling (fast rotation, a step of seconds) the pending process noise has negative
-    // parts, which the covariance drops as a whole (its positive semi-definite part) and the
-    // spread per principal direction, so the covariance's trace is then the larger (by up to
-    // 6e-5 relative in these streams; reported, not fixed here).
+    // The header states trace == spread[3]² (to rounding): both take the pending process
+    // noise's positive semi-definite part, also after a step with strong coupling (fast
+    // rotation, a step of seconds), where that noise has negative parts.
     let tr = oc[0] + oc[4] + oc[8];
     let s2 = s[3] * s[3];
     let asymmetric =
@@ -149,7 +146,7 @@ pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
         || (0..3).any(|i| oc[4 * i] < 0.0)
         || asymmetric
         || !minors_ok
-        || s2 > tr * (1.0 + 1e-12)
+        || (s2 - tr).abs() > 1e-12 * tr
     {
         return Err(format!(
             "orientation covariance {oc:?} (trace {tr:e}, spread² {s2:e}): not finite, \
