@@ -11,14 +11,42 @@
  *   status;
  * - after every failure: outputs byte-for-byte unchanged (sentinel fill), filter / AHRS state
  *   identical (quaternion, M, z, bias, spread);
- * - the AHRS: NaN/Inf gyroscope samples refused (state unchanged), NaN/Inf accelerometer and
- *   magnetometer samples accepted as "no sample" of that sensor (a NaN field the same as
- *   mag = NULL, bit for bit), a first sample without a finite accelerometer showing gravity
- *   refused, params with sample_time 0/NaN refused, a batch stopping at a NaN gyroscope entry
- *   in sample 5 of 10 (message "sample 5", rows 0..4 written and equal to single updates, rows
- *   5..9 untouched) and running through NaN accelerometer / magnetometer rows (equal to single
- *   updates), a batch whose first sample has a NaN accelerometer refused at "sample 0",
- *   mag = NULL accepted, bingham_ahrs_free(NULL), clones evolving identically;
+ * - the AHRS: NaN/Inf in any entry of a gyroscope, accelerometer or magnetometer sample
+ *   accepted as "no sample" of that sensor (one non-finite gyroscope entry the same as a NaN
+ *   row, a non-finite field the same as mag = NULL, bit for bit; the health readout's
+ *   gyr/acc/mag_missing_time growing by sample_time per missing row and back to 0 after a
+ *   usable one), a finite gyroscope turning by more than 1e6 rad in a sample refused (state
+ *   unchanged, also the hidden state: a clone taken before evolves identically), a first
+ *   sample without a finite accelerometer showing gravity refused, params with sample_time
+ *   0/NaN refused, a batch running through NaN gyroscope, accelerometer and magnetometer rows
+ *   (rows equal to single updates) and stopping at a huge gyroscope row in sample 5 of 10
+ *   (message "sample 5", rows 0..4 written and equal to single updates, rows 5..9 untouched),
+ *   a batch whose first sample has a NaN accelerometer refused at "sample 0", mag = NULL
+ *   accepted, bingham_ahrs_free(NULL), clones evolving identically;
+ * - bingham_ahrs_update_dt: NULLs with the message naming the argument; dt 0, negative,
+ *   NaN/Inf, below BINGHAM_AHRS_MIN_SAMPLE_TIME, above BINGHAM_AHRS_MAX_STEP_TIME refused with
+ *   the AHRS unchanged (getters, health readout, and a clone taken before evolving identically
+ *   afterwards), also before the first sample; the bounds themselves accepted;
+ *   update_dt(sample_time) == update bit for bit over a stream with NaN rows (from a fresh AHRS
+ *   and mid-stream); another dt is used (a different estimate); the gyroscope's turn limit
+ *   applied to |gyr| * dt; a gap of NaN gyroscope rows in motion widening the spread beyond
+ *   the same samples with the gyroscope present;
+ * - bingham_ahrs_update_batch_timed: uniformly spaced timestamps == bingham_ahrs_update_batch_health
+ *   bit for bit (quaternions, spread, health, final state; mag/spread/health NULL or not; NaN
+ *   rows in every channel processed); with jitter and dropped samples, a batch split anywhere
+ *   (pieces of 1, 0, 7, ... samples) == one call; the step of t[0]: from the previous timed
+ *   batch's last timestamp (== update_dt with that difference), sample_time on a fresh AHRS
+ *   and after an untimed update (== update); a timestamp NaN/Inf, equal to or before the
+ *   previous one, or a step above 10 s or below 1e-6 s stops the batch at that sample
+ *   ("sample 5": rows 0..4 written and equal to a reference, rows 5.. of quat, spread and
+ *   health untouched, the AHRS in the state after sample 4, the last timestamp t[4] kept); a
+ *   step of exactly 10 s accepted; a t[0] not after the previous batch's last timestamp
+ *   refused at "sample 0" with nothing written; NULLs, n = 0, n * 4 overflowing;
+ * - bingham_ahrs_orientation_covariance: the identity before the first sample; NULLs (output
+ *   untouched); after samples (with and without magnetometer, mid correction period, after
+ *   set_state) symmetric, positive semi-definite (principal minors), trace == spread[3]^2
+ *   within 1e-12 relative; in the world frame: a tilted sensor without magnetometer has its
+ *   unknown heading as the variance about world z (up), not about the sensor's z axis;
  * - the gyroscope bias's uncertainty: the defaults bias_std = 0.5 deg/s and
  *   gyro_scale_noise >= 0; bias_std NaN/negative/0 and gyro_scale_noise NaN/negative refused by
  *   bingham_ahrs_new with a message naming the field; bingham_ahrs_gyro_bias_covariance: NULLs
@@ -33,16 +61,21 @@
  *   0 <= mag_rejected <= 1, a reference with the dip of the simulated field (atan(40/20) below
  *   the horizon, positive; negative with the accelerometer's sign flipped), below
  *   BINGHAM_AHRS_HEALTH_THRESHOLD; without a magnetometer no reference, no heading score;
- *   NULL `a` / `out` refused with the output untouched;
+ *   NULL `a` / `out` refused with the output untouched; the missing times: 0 before and after
+ *   the first sample, the magnetometer's counted from the first sample when none is ever
+ *   given, free fall and a zero field counted as missing, update_dt's and a timed batch's
+ *   steps added;
  * - bingham_ahrs_update_batch_health (from a fresh AHRS and mid-stream, with spread and health
  *   each present or NULL, mag NULL): quaternions bit for bit the single updates', spread[k] the
- *   total spread and health[k] bingham_ahrs_health's score after sample k; a NaN gyroscope
- *   entry in sample 5 stops it there (rows 5.. untouched); NULLs refused, nothing written.
+ *   total spread and health[k] bingham_ahrs_health's score after sample k (NaN gyroscope rows
+ *   among the samples); a gyroscope row turning by more than 1e6 rad in sample 5 stops it there
+ *   (rows 5.. untouched); NULLs refused, nothing written.
  *
  * bingham_ahrs_params is filled with bingham_ahrs_params_default() only (its fields may change);
  * only sample_time, the latencies, bias_std and gyro_scale_noise are set by hand.
  */
 #define _DEFAULT_SOURCE 1
+#include <float.h>
 #include <stdint.h>
 #include <stdlib.h>
 
@@ -344,18 +377,29 @@ static void test_filter_vector(void) {
 
 /* ---- the AHRS ------------------------------------------------------------------------------- */
 
+/* Everything the getters show (the health readout's doubles included), for bit-for-bit
+ * comparisons. */
 typedef struct {
-    double q[4], m[16], z[4], bias[3], spread[4], cov[9];
-} astate;
+    double q[4], m[16], z[4], bias[3], spread[4], cov[9], ocov[9], health[12];
+} astate; /* doubles only: no padding for memcmp to trip on */
 
 static astate asnap(const bingham_ahrs *a) {
     astate s;
+    bingham_ahrs_health_report h;
     memset(&s, 0, sizeof s);
+    memset(&h, 0, sizeof h);
     CHECK_OK(bingham_ahrs_quaternion(a, s.q));
     CHECK_OK(bingham_ahrs_state(a, s.m, s.z));
     CHECK_OK(bingham_ahrs_gyro_bias(a, s.bias));
     CHECK_OK(bingham_ahrs_angular_spread(a, s.spread));
     CHECK_OK(bingham_ahrs_gyro_bias_covariance(a, s.cov));
+    CHECK_OK(bingham_ahrs_orientation_covariance(a, s.ocov));
+    CHECK_OK(bingham_ahrs_health(a, &h));
+    /* field by field: the struct's padding is not compared */
+    const double hv[12] = {h.score,           h.gravity_score,      h.tilt_score,       h.heading_score,
+                           h.tilt_innovation, h.heading_innovation, h.mag_rejected,     h.mag_dip,
+                           h.gyr_missing_time, h.acc_missing_time,  h.mag_missing_time, (double)h.has_mag_reference};
+    memcpy(s.health, hv, sizeof hv);
     return s;
 }
 
@@ -489,17 +533,56 @@ static void test_ahrs_update(void) {
     CHECK_STATUS(bingham_ahrs_update(a, g, NULL, mag), BINGHAM_ERR_NULL_ARGUMENT);
     check_null_msg(fn, "acc");
     CHECK(same_state(s, asnap(a)));
-    /* NaN / Inf in every entry of the gyroscope sample: refused, AHRS unchanged */
+    /* NaN / Inf in any entry of the gyroscope sample: "no gyroscope sample" (a gap), accepted
+     * (on clones): the same as a NaN row, bit for bit; the gap counted in the health readout
+     * (one sample_time), the other sensors' not */
     const double bad[3] = {NAN, INFINITY, -INFINITY};
     for (int i = 0; i < 3; ++i)
         for (int v = 0; v < 3; ++v) {
             double gg[3], aa[3], mm[3];
+            const double nan_row[3] = {NAN, NAN, NAN};
             sample(50, gg, aa, mm);
             gg[i] = bad[v];
-            CHECK_STATUS(bingham_ahrs_update(a, gg, aa, mm), BINGHAM_ERR_INVALID_ARGUMENT);
-            check_msg(fn, "gyr");
+            bingham_ahrs *c1 = NULL, *c2 = NULL;
+            CHECK_OK(bingham_ahrs_clone(a, &c1));
+            CHECK_OK(bingham_ahrs_clone(a, &c2));
+            if (!c1 || !c2) return;
+            CHECK_OK(bingham_ahrs_update(c1, gg, aa, mm));
+            CHECK_OK(bingham_ahrs_update(c2, nan_row, aa, mm));
+            astate t = asnap(c1);
+            CHECK(same_state(t, asnap(c2)));
+            CHECK(all_finite(t.q, 4) && all_finite(t.m, 16) && all_finite(t.z, 4) && all_finite(t.ocov, 9));
+            bingham_ahrs_health_report h;
+            memset(&h, 0, sizeof h);
+            CHECK_OK(bingham_ahrs_health(c1, &h));
+            CHECK(h.gyr_missing_time == 0.01 && h.acc_missing_time == 0.0 && h.mag_missing_time == 0.0);
+            bingham_ahrs_free(c1);
+            bingham_ahrs_free(c2);
+        }
+    CHECK(same_state(s, asnap(a)));
+    /* a finite gyroscope sample turning by more than 1e6 rad in one sample (|gyr| * 0.01 s):
+     * not a rate, refused with the AHRS unchanged (a clone taken before, fed the same next
+     * sample, stays identical: no hidden state changed either) */
+    {
+        const double huge_g[4][3] = {{2e8, 0.0, 0.0}, {0.0, -1e12, 0.0}, {1e150, 1e150, -1e150}, {-5e9, 5e9, 0.0}};
+        bingham_ahrs *c = NULL;
+        CHECK_OK(bingham_ahrs_clone(a, &c));
+        if (!c) return;
+        for (int k = 0; k < 4; ++k) {
+            double gg[3], aa[3], mm[3];
+            sample(50, gg, aa, mm);
+            CHECK_STATUS(bingham_ahrs_update(a, huge_g[k], aa, mm), BINGHAM_ERR_INVALID_ARGUMENT);
+            check_msg(fn, "gyroscope");
             CHECK(same_state(s, asnap(a)));
         }
+        double gg[3], aa[3], mm[3];
+        sample(50, gg, aa, mm);
+        CHECK_OK(bingham_ahrs_update(a, gg, aa, mm));
+        CHECK_OK(bingham_ahrs_update(c, gg, aa, mm));
+        CHECK(same_state(asnap(a), asnap(c)));
+        bingham_ahrs_free(c);
+        s = asnap(a);
+    }
     /* NaN / Inf in an accelerometer or magnetometer entry: "no sample" of that sensor, accepted
      * (on clones); a non-finite field is the same as mag = NULL, bit for bit */
     for (int which = 1; which < 3; ++which)
@@ -620,21 +703,22 @@ static void test_ahrs_batch(void) {
     for (int k = 0; k < N; ++k) sample(k, g + 3 * k, acc + 3 * k, mag + 3 * k);
     const char *fns[2] = {"bingham_ahrs_update_batch", "bingham_ahrs_update_batch_spread"};
     for (int variant = 0; variant < 2; ++variant)
-        for (int which = 0; which < 3; ++which) {
+        for (int which = 0; which < 4; ++which) {
             const char *fn = fns[variant];
             bingham_ahrs *a = new_ahrs(0.01), *ref = new_ahrs(0.01);
             if (!a || !ref) return;
-            /* a NaN in sample 5: in the gyroscope row it stops the batch there; in the
-             * accelerometer or magnetometer row it means "no sample" of that sensor */
-            double *arr = which == 0 ? g : which == 1 ? acc : mag;
+            /* a NaN in sample 5 (which 0..2): "no sample" of that sensor (the gyroscope's a gap
+             * the AHRS carries the orientation through), the batch runs on; a gyroscope entry
+             * turning by more than 1e6 rad in the sample (which 3) stops the batch there */
+            double *arr = which == 0 || which == 3 ? g : which == 1 ? acc : mag;
             double saved = arr[3 * 5 + 1];
-            arr[3 * 5 + 1] = NAN;
+            arr[3 * 5 + 1] = which == 3 ? 1e12 : NAN;
             fill(quat, sizeof quat);
             fill(spread, sizeof spread);
             int st = variant ? (int)bingham_ahrs_update_batch_spread(a, N, g, acc, mag, quat, spread)
                              : (int)bingham_ahrs_update_batch(a, N, g, acc, mag, quat);
-            const int done = which == 0 ? 5 : N;
-            if (which == 0) {
+            const int done = which == 3 ? 5 : N;
+            if (which == 3) {
                 CHECK_STATUS(st, BINGHAM_ERR_INVALID_ARGUMENT);
                 check_msg(fn, "sample 5");
             } else {
@@ -722,9 +806,11 @@ static void hsnap(const bingham_ahrs *a, bingham_ahrs_health_report *h) {
 /* Every field finite, the score the largest of the three averages, the rejected fraction in
  * [0, 1], the innovations non-negative where they are angles. */
 static void check_health_consistent(const bingham_ahrs_health_report *h) {
-    const double v[8] = {h->score,           h->gravity_score,      h->tilt_score,   h->heading_score,
-                         h->tilt_innovation, h->heading_innovation, h->mag_rejected, h->mag_dip};
-    CHECK(all_finite(v, 8));
+    const double v[11] = {h->score,           h->gravity_score,      h->tilt_score,   h->heading_score,
+                          h->tilt_innovation, h->heading_innovation, h->mag_rejected, h->mag_dip,
+                          h->gyr_missing_time, h->acc_missing_time,  h->mag_missing_time};
+    CHECK(all_finite(v, 11));
+    CHECK(h->gyr_missing_time >= 0.0 && h->acc_missing_time >= 0.0 && h->mag_missing_time >= 0.0);
     CHECK(h->score == fmax(h->gravity_score, fmax(h->tilt_score, h->heading_score)));
     CHECK(h->gravity_score >= 0.0 && h->tilt_score >= 0.0 && h->heading_score >= 0.0);
     CHECK(h->tilt_innovation >= 0.0 && h->tilt_innovation <= PI);
@@ -746,6 +832,7 @@ static void test_ahrs_health(void) {
     CHECK(h.score == 0.0 && h.gravity_score == 0.0 && h.tilt_score == 0.0 && h.heading_score == 0.0);
     CHECK(h.tilt_innovation == 0.0 && h.heading_innovation == 0.0 && h.mag_rejected == 0.0 && h.mag_dip == 0.0);
     CHECK(h.has_mag_reference == 0);
+    CHECK(h.gyr_missing_time == 0.0 && h.acc_missing_time == 0.0 && h.mag_missing_time == 0.0);
     /* NULLs: refused, the output untouched, the AHRS unchanged */
     astate s0 = asnap(a);
     fill(&h, sizeof h);
@@ -821,6 +908,7 @@ static void test_ahrs_batch_health(void) {
         sample(k, g + 3 * k, acc + 3 * k, mag + 3 * k);
         g[3 * k] += 0.5 * sin(0.05 * k); /* some motion */
         if (k % 7 == 3) mag[3 * k + 1] = NAN; /* no magnetometer sample */
+        if (k % 50 == 17 || (k >= 230 && k < 236)) g[3 * k + 2] = NAN; /* gyroscope gaps */
     }
     /* from a fresh AHRS (the first samples included) and from a clone of one 200 samples in:
      * every row equal to single updates and the readout after them */
@@ -882,12 +970,13 @@ static void test_ahrs_batch_health(void) {
         bingham_ahrs_free(a);
         bingham_ahrs_free(ref);
     }
-    /* a NaN gyroscope entry in sample 5: refused there, rows 0..4 written, the rest untouched */
+    /* a gyroscope entry turning by more than 1e6 rad in sample 5: refused there, rows 0..4
+     * written, the rest untouched */
     {
         bingham_ahrs *a = new_ahrs(0.01), *ref = new_ahrs(0.01);
         if (!a || !ref) return;
         double saved = g[3 * 5 + 2];
-        g[3 * 5 + 2] = NAN;
+        g[3 * 5 + 2] = -3e8;
         fill(quat, sizeof quat);
         fill(spread, sizeof spread);
         fill(health, sizeof health);
@@ -1009,28 +1098,33 @@ static void test_ahrs_bias_uncertainty(void) {
         CHECK(cov[4 * i] > 0.0 && cov[4 * i] < var0);
         for (int j = 0; j < 3; ++j) CHECK(fabs(cov[3 * i + j] - cov[3 * j + i]) <= 1e-12 * var0);
     }
-    /* a NaN gyroscope sample in the middle of the stream is refused with the state unchanged;
-     * NaN accelerometer and magnetometer rows are accepted */
+    /* NaN gyroscope, accelerometer and magnetometer rows in the middle of the stream: each a
+     * missing sample of that sensor, accepted; the health readout's missing time of that sensor
+     * grows by sample_time per missing row and is 0 again after a usable sample */
     {
-        double g[3], acc[3], mag[3], q0[4], q1[4];
-        astate s0 = asnap(a);
-        CHECK_OK(bingham_ahrs_quaternion(a, q0));
-        sample(3000, g, acc, mag);
-        g[1] = NAN;
-        CHECK_STATUS(bingham_ahrs_update(a, g, acc, mag), BINGHAM_ERR_INVALID_ARGUMENT);
-        check_msg("bingham_ahrs_update", "gyr");
-        CHECK_OK(bingham_ahrs_quaternion(a, q1));
-        CHECK(memcmp(q0, q1, sizeof q0) == 0 && same_state(s0, asnap(a)));
-        sample(3000, g, acc, mag);
-        acc[0] = NAN;
-        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
-        sample(3001, g, acc, mag);
-        mag[2] = NAN;
-        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
-        sample(3002, g, acc, mag);
-        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+        double g[3], acc[3], mag[3];
+        int k = 3000;
+        for (int which = 0; which < 3; ++which) {
+            for (int r = 1; r <= 3; ++r, ++k) {
+                sample(k, g, acc, mag);
+                (which == 0 ? g : which == 1 ? acc : mag)[r - 1] = NAN;
+                CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+                bingham_ahrs_health_report h;
+                hsnap(a, &h);
+                const double missing[3] = {h.gyr_missing_time, h.acc_missing_time, h.mag_missing_time};
+                for (int i = 0; i < 3; ++i) {
+                    if (i == which) CHECK_CLOSE(missing[i], 0.01 * r, 1e-15);
+                    else CHECK(missing[i] == 0.0);
+                }
+            }
+            sample(k++, g, acc, mag);
+            CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+            bingham_ahrs_health_report h;
+            hsnap(a, &h);
+            CHECK(h.gyr_missing_time == 0.0 && h.acc_missing_time == 0.0 && h.mag_missing_time == 0.0);
+        }
         astate s1 = asnap(a);
-        CHECK(all_finite(s1.q, 4) && all_finite(s1.cov, 9));
+        CHECK(all_finite(s1.q, 4) && all_finite(s1.cov, 9) && all_finite(s1.ocov, 9));
     }
     bingham_ahrs_free(a);
 }
@@ -1119,6 +1213,554 @@ static void test_ahrs_latency(void) {
     bingham_ahrs_free(a);
 }
 
+/* ---- the missing times of the health readout ----------------------------------------------- */
+
+static void check_missing(const bingham_ahrs *a, double gyr, double acc, double mag) {
+    bingham_ahrs_health_report h;
+    hsnap(a, &h);
+    const double got[3] = {h.gyr_missing_time, h.acc_missing_time, h.mag_missing_time}, want[3] = {gyr, acc, mag};
+    for (int i = 0; i < 3; ++i) {
+        if (want[i] == 0.0) CHECK(got[i] == 0.0);
+        else CHECK_CLOSE(got[i], want[i], 1e-12);
+    }
+}
+
+static void test_ahrs_missing_times(void) {
+    double g[3], acc[3], mag[3];
+    const double nan_row[3] = {NAN, NAN, NAN}, zero[3] = {0.0, 0.0, 0.0};
+    bingham_ahrs *a = new_ahrs(0.01);
+    if (!a) return;
+    check_missing(a, 0.0, 0.0, 0.0); /* before the first sample */
+    /* a first sample without a magnetometer: nothing missing yet; the magnetometer's time then
+     * counts from it */
+    sample(0, g, acc, mag);
+    CHECK_OK(bingham_ahrs_update(a, g, acc, NULL));
+    check_missing(a, 0.0, 0.0, 0.0);
+    for (int k = 1; k <= 100; ++k) {
+        sample(k, g, acc, mag);
+        CHECK_OK(bingham_ahrs_update(a, g, acc, NULL));
+    }
+    check_missing(a, 0.0, 0.0, 1.0);
+    /* a zero field is no sample: the count goes on; a field resets it */
+    sample(101, g, acc, mag);
+    CHECK_OK(bingham_ahrs_update(a, g, acc, zero));
+    check_missing(a, 0.0, 0.0, 1.01);
+    CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+    check_missing(a, 0.0, 0.0, 0.0);
+    /* free fall (|acc| < gravity/4): no accelerometer sample */
+    const double fall[3] = {0.0, 0.3, 1.0};
+    CHECK_OK(bingham_ahrs_update(a, g, fall, mag));
+    check_missing(a, 0.0, 0.01, 0.0);
+    CHECK_OK(bingham_ahrs_update(a, g, fall, mag));
+    check_missing(a, 0.0, 0.02, 0.0);
+    CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+    check_missing(a, 0.0, 0.0, 0.0);
+    /* update_dt: the sample's own step is added */
+    CHECK_OK(bingham_ahrs_update_dt(a, 0.05, nan_row, acc, mag));
+    check_missing(a, 0.05, 0.0, 0.0);
+    CHECK_OK(bingham_ahrs_update_dt(a, 0.03, nan_row, nan_row, mag));
+    check_missing(a, 0.08, 0.03, 0.0);
+    CHECK_OK(bingham_ahrs_update_dt(a, 0.02, g, nan_row, nan_row));
+    check_missing(a, 0.0, 0.05, 0.02);
+    CHECK_OK(bingham_ahrs_update_dt(a, 0.01, g, acc, mag));
+    check_missing(a, 0.0, 0.0, 0.0);
+    /* a timed batch: the steps between the timestamps (the first one's, after an untimed
+     * update, sample_time) */
+    {
+        double t[4] = {50.0, 50.02, 50.05, 50.25}, gg[12], aa[12], mm[12], q[16];
+        for (int k = 0; k < 4; ++k) {
+            sample(110 + k, gg + 3 * k, aa + 3 * k, mm + 3 * k);
+            if (k > 0) gg[3 * k] = NAN;
+        }
+        CHECK_OK(bingham_ahrs_update_batch_timed(a, 4, t, gg, aa, mm, q, NULL, NULL));
+        check_missing(a, (50.25 - 50.05) + (50.05 - 50.02) + (50.02 - 50.0), 0.0, 0.0);
+        double t1 = 50.26;
+        CHECK_OK(bingham_ahrs_update_batch_timed(a, 1, &t1, g, acc, mag, q, NULL, NULL));
+        check_missing(a, 0.0, 0.0, 0.0);
+    }
+    bingham_ahrs_free(a);
+}
+
+/* ---- bingham_ahrs_update_dt -------------------------------------------------------------------- */
+
+/* The rotation angle (rad) between two unit quaternions. */
+static double angle_between(const double *p, const double *q) {
+    double d = fabs(p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3]);
+    return 2.0 * acos(d > 1.0 ? 1.0 : d);
+}
+
+/* Sample k of sample() with motion (a swinging rate about x) and, if `gaps`, NaN rows: the
+ * gyroscope every 13th, the accelerometer every 17th (never in sample 0), the magnetometer
+ * every 5th. */
+static void moving_sample(int k, int gaps, double *g, double *acc, double *mag) {
+    sample(k, g, acc, mag);
+    g[0] += 0.5 * sin(0.05 * k);
+    if (!gaps) return;
+    if (k % 13 == 5) g[1] = NAN;
+    if (k % 17 == 3) acc[2] = NAN;
+    if (k % 5 == 2) mag[0] = NAN;
+}
+
+static void test_ahrs_update_dt(void) {
+    const char *fn = "bingham_ahrs_update_dt";
+    double g[3], acc[3], mag[3];
+    const double nan_row[3] = {NAN, NAN, NAN};
+    bingham_ahrs *a = new_ahrs(0.01), *ref = new_ahrs(0.01);
+    if (!a || !ref) return;
+    /* update_dt(sample_time) == update, bit for bit: from a fresh AHRS, 300 samples in motion
+     * with NaN rows in every channel and mag NULL in every third */
+    int same_all = 1;
+    for (int k = 0; k < 300; ++k) {
+        moving_sample(k, 1, g, acc, mag);
+        const double *m = k % 3 == 1 ? NULL : mag;
+        CHECK_OK(bingham_ahrs_update_dt(a, 0.01, g, acc, m));
+        CHECK_OK(bingham_ahrs_update(ref, g, acc, m));
+        same_all &= same_state(asnap(a), asnap(ref));
+    }
+    CHECK(same_all);
+    /* the first sample's dt is not used (the AHRS starts from it) */
+    {
+        bingham_ahrs *f1 = new_ahrs(0.01), *f2 = new_ahrs(0.01);
+        if (!f1 || !f2) return;
+        moving_sample(0, 0, g, acc, mag);
+        CHECK_OK(bingham_ahrs_update_dt(f1, 0.5, g, acc, mag));
+        CHECK_OK(bingham_ahrs_update(f2, g, acc, mag));
+        CHECK(same_state(asnap(f1), asnap(f2)));
+        bingham_ahrs_free(f1);
+        bingham_ahrs_free(f2);
+    }
+    /* dt is used: after a steady turn of 0.3 rad/s about z (the sensor's last rate), without
+     * accelerometer and magnetometer samples, the estimate turns by 0.15 rad in dt = 0.5 s,
+     * by 0.003 rad in sample_time */
+    {
+        bingham_ahrs *c1 = new_ahrs(0.01), *c2 = NULL;
+        if (!c1) return;
+        for (int k = 0; k < 300; ++k) {
+            sample(k, g, acc, mag);
+            CHECK_OK(bingham_ahrs_update(c1, g, acc, mag));
+        }
+        CHECK_OK(bingham_ahrs_clone(c1, &c2));
+        if (!c2) return;
+        double q0[4], q1[4], q2[4];
+        CHECK_OK(bingham_ahrs_quaternion(c1, q0));
+        sample(300, g, acc, mag);
+        CHECK_OK(bingham_ahrs_update_dt(c1, 0.5, g, nan_row, NULL));
+        CHECK_OK(bingham_ahrs_update_dt(c2, 0.01, g, nan_row, NULL));
+        CHECK_OK(bingham_ahrs_quaternion(c1, q1));
+        CHECK_OK(bingham_ahrs_quaternion(c2, q2));
+        const double a1 = angle_between(q0, q1), a2 = angle_between(q0, q2);
+        if (fabs(a1 - 0.15) > 0.003 || fabs(a2 - 0.003) > 1e-4) fprintf(stderr, "    turns %g, %g\n", a1, a2);
+        CHECK(fabs(a1 - 0.15) <= 0.003 && fabs(a2 - 0.003) <= 1e-4);
+        bingham_ahrs_free(c1);
+        bingham_ahrs_free(c2);
+    }
+    /* a bad dt: refused, the AHRS unchanged (getters and readout; a clone taken before, fed the
+     * same next sample, stays identical), whatever the sample holds */
+    {
+        const double bad_dt[12] = {0.0,  -0.0,  -0.01, NAN, INFINITY, -INFINITY, 1e-7, 0.999e-6,
+                                   10.000001, 11.0, 1e300, -DBL_MAX};
+        bingham_ahrs *before = NULL;
+        CHECK_OK(bingham_ahrs_clone(a, &before));
+        if (!before) return;
+        astate s = asnap(a);
+        moving_sample(300, 0, g, acc, mag);
+        for (int k = 0; k < 12; ++k) {
+            CHECK_STATUS(bingham_ahrs_update_dt(a, bad_dt[k], k % 2 ? nan_row : g, acc, k % 3 ? mag : NULL),
+                         BINGHAM_ERR_INVALID_ARGUMENT);
+            check_msg(fn, "dt");
+            CHECK(same_state(s, asnap(a)));
+        }
+        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+        CHECK_OK(bingham_ahrs_update(before, g, acc, mag));
+        CHECK(same_state(asnap(a), asnap(before)));
+        bingham_ahrs_free(before);
+        /* the bounds themselves: accepted (on clones) */
+        const double good_dt[2] = {BINGHAM_AHRS_MIN_SAMPLE_TIME, BINGHAM_AHRS_MAX_STEP_TIME};
+        CHECK(BINGHAM_AHRS_MAX_STEP_TIME == 10.0);
+        for (int k = 0; k < 2; ++k) {
+            bingham_ahrs *c = NULL;
+            CHECK_OK(bingham_ahrs_clone(a, &c));
+            if (!c) return;
+            CHECK_OK(bingham_ahrs_update_dt(c, good_dt[k], g, acc, mag));
+            astate t = asnap(c);
+            CHECK(all_finite(t.q, 4) && all_finite(t.m, 16) && all_finite(t.spread, 4) && all_finite(t.ocov, 9));
+            bingham_ahrs_free(c);
+        }
+    }
+    /* before the first sample: a bad dt refused, the AHRS stays uninitialized */
+    {
+        bingham_ahrs *f = new_ahrs(0.01);
+        if (!f) return;
+        astate s0 = asnap(f);
+        moving_sample(0, 0, g, acc, mag);
+        CHECK_STATUS(bingham_ahrs_update_dt(f, NAN, g, acc, mag), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg(fn, "dt");
+        CHECK_STATUS(bingham_ahrs_update_dt(f, 0.0, g, acc, mag), BINGHAM_ERR_INVALID_ARGUMENT);
+        CHECK(same_state(s0, asnap(f)));
+        bingham_ahrs_free(f);
+    }
+    /* the gyroscope's limit is on the turn |gyr| * dt: 5e7 rad/s is 5e5 rad in 0.01 s
+     * (accepted, on a clone: the estimate stays a valid state), 5e6 rad in 0.1 s (refused) */
+    {
+        const double fast[3] = {5e7, 0.0, 0.0};
+        bingham_ahrs *c = NULL;
+        CHECK_OK(bingham_ahrs_clone(a, &c));
+        if (!c) return;
+        CHECK_OK(bingham_ahrs_update_dt(c, 0.01, fast, acc, mag));
+        astate t = asnap(c);
+        CHECK(all_finite(t.q, 4) && all_finite(t.m, 16) && all_finite(t.z, 4) && all_finite(t.spread, 4));
+        bingham_ahrs_free(c);
+        astate s = asnap(a);
+        CHECK_STATUS(bingham_ahrs_update_dt(a, 0.1, fast, acc, mag), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg(fn, "gyroscope");
+        CHECK(same_state(s, asnap(a)));
+    }
+    /* NULLs (before a bad dt too), the AHRS unchanged; mag NULL accepted */
+    {
+        astate s = asnap(a);
+        CHECK_STATUS(bingham_ahrs_update_dt(NULL, 0.01, g, acc, mag), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "a");
+        CHECK_STATUS(bingham_ahrs_update_dt(a, 0.01, NULL, acc, mag), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "gyr");
+        CHECK_STATUS(bingham_ahrs_update_dt(a, 0.01, g, NULL, mag), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "acc");
+        CHECK_STATUS(bingham_ahrs_update_dt(a, NAN, g, NULL, mag), BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "acc");
+        CHECK(same_state(s, asnap(a)));
+        CHECK_OK(bingham_ahrs_update_dt(a, 0.012, g, acc, NULL));
+    }
+    /* a gyroscope gap in motion (10 samples without any sensor) widens the spread beyond that
+     * of the same stretch with the gyroscope present */
+    {
+        bingham_ahrs *c1 = NULL, *c2 = NULL;
+        CHECK_OK(bingham_ahrs_clone(a, &c1));
+        CHECK_OK(bingham_ahrs_clone(a, &c2));
+        if (!c1 || !c2) return;
+        for (int k = 301; k < 311; ++k) {
+            moving_sample(k, 0, g, acc, mag);
+            CHECK_OK(bingham_ahrs_update(c1, nan_row, nan_row, nan_row));
+            CHECK_OK(bingham_ahrs_update(c2, g, nan_row, nan_row));
+        }
+        double s1[4], s2[4];
+        CHECK_OK(bingham_ahrs_angular_spread(c1, s1));
+        CHECK_OK(bingham_ahrs_angular_spread(c2, s2));
+        if (!(s1[3] > s2[3])) fprintf(stderr, "    spread with the gap %.17g, without %.17g\n", s1[3], s2[3]);
+        CHECK(s1[3] > s2[3] && s2[3] > 0.0);
+        check_missing(c1, 0.1, 0.1, 0.112); /* (the sample before had no magnetometer) */
+        bingham_ahrs_free(c1);
+        bingham_ahrs_free(c2);
+    }
+    bingham_ahrs_free(a);
+    bingham_ahrs_free(ref);
+}
+
+/* ---- bingham_ahrs_update_batch_timed ----------------------------------------------------------- */
+
+enum { TN = 300 };
+static double tg[3 * TN], tacc[3 * TN], tmag[3 * TN];
+
+/* quat, spread and health rows of a reference run (one timed or untimed batch, or pieces). */
+typedef struct {
+    double quat[4 * TN], spread[TN], health[TN];
+} rows_t;
+
+static void test_ahrs_batch_timed(void) {
+    const char *fn = "bingham_ahrs_update_batch_timed";
+    static rows_t r1, r2;
+    static double t[TN];
+    for (int k = 0; k < TN; ++k) moving_sample(k, 1, tg + 3 * k, tacc + 3 * k, tmag + 3 * k);
+    /* uniformly spaced timestamps (any origin) == bingham_ahrs_update_batch_health, bit for bit,
+     * with each optional argument present or NULL; from a fresh AHRS (the first sample's step is
+     * sample_time) */
+    for (int k = 0; k < TN; ++k) t[k] = 12345.678 + 0.01 * k;
+    for (int variant = 0; variant < 8; ++variant) { /* bit 0: mag, bit 1: spread, bit 2: health */
+        bingham_ahrs *a = new_ahrs(0.01), *ref = new_ahrs(0.01);
+        if (!a || !ref) return;
+        const double *m = variant & 1 ? tmag : NULL;
+        double *sp1 = variant & 2 ? r1.spread : NULL, *h1 = variant & 4 ? r1.health : NULL;
+        double *sp2 = variant & 2 ? r2.spread : NULL, *h2 = variant & 4 ? r2.health : NULL;
+        fill(&r1, sizeof r1);
+        fill(&r2, sizeof r2);
+        CHECK_OK(bingham_ahrs_update_batch_timed(a, TN, t, tg, tacc, m, r1.quat, sp1, h1));
+        CHECK_OK(bingham_ahrs_update_batch_health(ref, TN, tg, tacc, m, r2.quat, sp2, h2));
+        CHECK(memcmp(&r1, &r2, sizeof r1) == 0);
+        if (!sp1) CHECK(untouched(r1.spread, sizeof r1.spread));
+        if (!h1) CHECK(untouched(r1.health, sizeof r1.health));
+        if (sp1) CHECK(all_finite(r1.spread, TN));
+        CHECK(same_state(asnap(a), asnap(ref)));
+        bingham_ahrs_free(a);
+        bingham_ahrs_free(ref);
+    }
+    /* jitter and dropped samples: a batch split anywhere == one call */
+    t[0] = 3.0;
+    for (int k = 1; k < TN; ++k) t[k] = t[k - 1] + 0.01 * (1.0 + 0.3 * sin(1.7 * k)) + (k % 37 == 0 ? 0.03 : 0.0);
+    {
+        bingham_ahrs *a = new_ahrs(0.01), *b = new_ahrs(0.01);
+        if (!a || !b) return;
+        fill(&r1, sizeof r1);
+        fill(&r2, sizeof r2);
+        CHECK_OK(bingham_ahrs_update_batch_timed(a, TN, t, tg, tacc, tmag, r1.quat, r1.spread, r1.health));
+        const int pieces[7] = {1, 0, 7, 50, 1, 0, 141};
+        int at = 0;
+        for (int i = 0; i < 7 || at < TN; ++i) {
+            const int n = i < 7 ? pieces[i] : TN - at;
+            CHECK_OK(bingham_ahrs_update_batch_timed(b, (size_t)n, t + at, tg + 3 * at, tacc + 3 * at, tmag + 3 * at,
+                                                     r2.quat + 4 * at, r2.spread + at, r2.health + at));
+            at += n;
+        }
+        CHECK(memcmp(&r1, &r2, sizeof r1) == 0 && same_state(asnap(a), asnap(b)));
+        /* the irregular steps are used: not the untimed batch's results */
+        bingham_ahrs *u = new_ahrs(0.01);
+        if (!u) return;
+        CHECK_OK(bingham_ahrs_update_batch_health(u, TN, tg, tacc, tmag, r2.quat, r2.spread, r2.health));
+        CHECK(memcmp(r1.quat, r2.quat, sizeof r1.quat) != 0);
+        bingham_ahrs_free(u);
+
+        /* the step of t[0]: from the previous timed batch's last timestamp */
+        double g[3], acc[3], mag[3], tn = t[TN - 1] + 0.037;
+        moving_sample(TN, 0, g, acc, mag);
+        CHECK_OK(bingham_ahrs_update_batch_timed(a, 1, &tn, g, acc, mag, r1.quat, NULL, NULL));
+        CHECK_OK(bingham_ahrs_update_dt(b, tn - t[TN - 1], g, acc, mag));
+        CHECK(same_state(asnap(a), asnap(b)));
+        /* ... and sample_time after an untimed update (update or update_dt) came since: then any
+         * finite t[0], even one before the last timestamp, starts with sample_time */
+        for (int kind = 0; kind < 2; ++kind) {
+            moving_sample(TN + 1 + 2 * kind, 0, g, acc, mag);
+            if (kind == 0) CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+            else CHECK_OK(bingham_ahrs_update_dt(a, 0.02, g, acc, mag));
+            if (kind == 0) CHECK_OK(bingham_ahrs_update(b, g, acc, mag));
+            else CHECK_OK(bingham_ahrs_update_dt(b, 0.02, g, acc, mag));
+            moving_sample(TN + 2 + 2 * kind, 0, g, acc, mag);
+            double early = 1.0;
+            CHECK_OK(bingham_ahrs_update_batch_timed(a, 1, &early, g, acc, mag, r1.quat, NULL, NULL));
+            CHECK_OK(bingham_ahrs_update(b, g, acc, mag));
+            CHECK(same_state(asnap(a), asnap(b)));
+        }
+        /* a step of exactly BINGHAM_AHRS_MAX_STEP_TIME (10 s) is accepted; then t[0] equal to
+         * or before the last timestamp, or more than 10 s after it: refused at "sample 0",
+         * nothing written, the AHRS unchanged */
+        double t5 = 5.0, t15 = 15.0; /* (the last timestamp: 1.0) */
+        CHECK_OK(bingham_ahrs_update_batch_timed(a, 1, &t5, g, acc, mag, r1.quat, NULL, NULL));
+        CHECK_OK(bingham_ahrs_update_batch_timed(a, 1, &t15, g, acc, mag, r1.quat, NULL, NULL));
+        const double bad0[4] = {15.0, 14.0, 25.000001, NAN};
+        for (int k = 0; k < 4; ++k) {
+            astate s = asnap(a);
+            double tt[2] = {bad0[k], 30.0}, gg[6], aa[6], mm[6];
+            for (int i = 0; i < 2; ++i) moving_sample(TN + 10 + i, 0, gg + 3 * i, aa + 3 * i, mm + 3 * i);
+            fill(&r1, sizeof r1);
+            CHECK_STATUS(bingham_ahrs_update_batch_timed(a, 2, tt, gg, aa, mm, r1.quat, r1.spread, r1.health),
+                         BINGHAM_ERR_INVALID_ARGUMENT);
+            check_msg(fn, "sample 0");
+            CHECK(untouched(&r1, sizeof r1) && same_state(s, asnap(a)));
+        }
+        bingham_ahrs_free(a);
+        bingham_ahrs_free(b);
+    }
+    /* a bad timestamp in sample 5 of 10 (NaN, +-Inf, equal to or before t[4], a step above 10 s
+     * or below 1e-6 s) stops the batch there: rows 0..4 written and equal to a reference fed
+     * only samples 0..4 (one timed batch), rows 5..9 untouched, the AHRS in the reference's
+     * state; the last timestamp kept is t[4]: both continue identically */
+    {
+        const double base = 100.0;
+        for (int kind = 0; kind < 7; ++kind) {
+            double tt[10];
+            for (int k = 0; k < 10; ++k) tt[k] = base + 0.01 * k;
+            const double t4 = tt[4];
+            const double bad5[7] = {NAN, INFINITY, -INFINITY, t4, t4 - 0.01, t4 + 10.5, t4 + 1e-7};
+            tt[5] = bad5[kind];
+            bingham_ahrs *a = new_ahrs(0.01), *ref = new_ahrs(0.01);
+            if (!a || !ref) return;
+            fill(&r1, sizeof r1);
+            fill(&r2, sizeof r2);
+            CHECK_STATUS(bingham_ahrs_update_batch_timed(a, 10, tt, tg, tacc, tmag, r1.quat, r1.spread, r1.health),
+                         BINGHAM_ERR_INVALID_ARGUMENT);
+            check_msg(fn, "sample 5");
+            if (kind < 5) check_msg(fn, "timestamp");
+            CHECK_OK(bingham_ahrs_update_batch_timed(ref, 5, tt, tg, tacc, tmag, r2.quat, r2.spread, r2.health));
+            CHECK(memcmp(r1.quat, r2.quat, 4 * 5 * sizeof(double)) == 0);
+            CHECK(memcmp(r1.spread, r2.spread, 5 * sizeof(double)) == 0);
+            CHECK(memcmp(r1.health, r2.health, 5 * sizeof(double)) == 0);
+            CHECK(untouched(r1.quat + 4 * 5, sizeof r1.quat - 4 * 5 * sizeof(double)));
+            CHECK(untouched(r1.spread + 5, sizeof r1.spread - 5 * sizeof(double)));
+            CHECK(untouched(r1.health + 5, sizeof r1.health - 5 * sizeof(double)));
+            CHECK(same_state(asnap(a), asnap(ref)));
+            tt[5] = t4 + 0.013;
+            CHECK_OK(bingham_ahrs_update_batch_timed(a, 5, tt + 5, tg + 15, tacc + 15, tmag + 15, r1.quat, NULL, NULL));
+            CHECK_OK(bingham_ahrs_update_batch_timed(ref, 5, tt + 5, tg + 15, tacc + 15, tmag + 15, r2.quat, NULL, NULL));
+            CHECK(same_state(asnap(a), asnap(ref)));
+            bingham_ahrs_free(a);
+            bingham_ahrs_free(ref);
+        }
+    }
+    /* a huge gyroscope row stops a timed batch too; NaN gyroscope rows do not (above) */
+    {
+        bingham_ahrs *a = new_ahrs(0.01);
+        if (!a) return;
+        double tt[4] = {0.0, 0.01, 0.02, 0.03}, gg[12];
+        memcpy(gg, tg, sizeof gg);
+        gg[3 * 2 + 1] = 1e12;
+        fill(&r1, sizeof r1);
+        CHECK_STATUS(bingham_ahrs_update_batch_timed(a, 4, tt, gg, tacc, tmag, r1.quat, NULL, NULL),
+                     BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg(fn, "sample 2");
+        CHECK(untouched(r1.quat + 8, sizeof r1.quat - 8 * sizeof(double)));
+        bingham_ahrs_free(a);
+    }
+    /* NULLs: refused, nothing written, the AHRS unchanged; n = 0 does nothing; n * 4
+     * overflowing refused before any access */
+    {
+        bingham_ahrs *a = new_ahrs(0.01);
+        if (!a) return;
+        CHECK_OK(bingham_ahrs_update_batch_timed(a, 20, t, tg, tacc, tmag, r1.quat, NULL, NULL));
+        astate s = asnap(a);
+        fill(&r1, sizeof r1);
+        const double *tt = t + 20;
+        CHECK_STATUS(bingham_ahrs_update_batch_timed(NULL, 10, tt, tg, tacc, tmag, r1.quat, r1.spread, r1.health),
+                     BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "a");
+        CHECK_STATUS(bingham_ahrs_update_batch_timed(a, 10, NULL, tg, tacc, tmag, r1.quat, r1.spread, r1.health),
+                     BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "t");
+        CHECK_STATUS(bingham_ahrs_update_batch_timed(a, 10, tt, NULL, tacc, tmag, r1.quat, r1.spread, r1.health),
+                     BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "gyr");
+        CHECK_STATUS(bingham_ahrs_update_batch_timed(a, 10, tt, tg, NULL, tmag, r1.quat, r1.spread, r1.health),
+                     BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "acc");
+        CHECK_STATUS(bingham_ahrs_update_batch_timed(a, 10, tt, tg, tacc, tmag, NULL, r1.spread, r1.health),
+                     BINGHAM_ERR_NULL_ARGUMENT);
+        check_null_msg(fn, "quat");
+        CHECK(untouched(&r1, sizeof r1) && same_state(s, asnap(a)));
+        CHECK_OK(bingham_ahrs_update_batch_timed(a, 0, tt, tg, tacc, tmag, r1.quat, r1.spread, r1.health));
+        CHECK(untouched(&r1, sizeof r1) && same_state(s, asnap(a)));
+        /* (n = SIZE_MAX / 32: n timestamps fit in the address space, n rows of 3 do not) */
+        CHECK_STATUS(bingham_ahrs_update_batch_timed(a, (size_t)-1 / 32, no_access(), no_access(), no_access(), NULL,
+                                                     no_access(), NULL, NULL),
+                     BINGHAM_ERR_INVALID_DIMENSION);
+        check_msg(fn, NULL);
+        CHECK(same_state(s, asnap(a)));
+        /* n = 0 kept the last timestamp: the batch continues as one call would */
+        bingham_ahrs *b = new_ahrs(0.01);
+        if (!b) return;
+        CHECK_OK(bingham_ahrs_update_batch_timed(b, 30, t, tg, tacc, tmag, r2.quat, NULL, NULL));
+        CHECK_OK(bingham_ahrs_update_batch_timed(a, 10, tt, tg + 60, tacc + 60, tmag + 60, r1.quat, NULL, NULL));
+        CHECK(same_state(asnap(a), asnap(b)));
+        bingham_ahrs_free(a);
+        bingham_ahrs_free(b);
+    }
+}
+
+/* ---- bingham_ahrs_orientation_covariance --------------------------------------------------------- */
+
+/* cov: finite, symmetric, positive semi-definite (every principal minor >= 0 up to rounding),
+ * its trace the square of the total spread within 1e-12 relative. */
+static void check_orientation_cov(const bingham_ahrs *a, const char *where) {
+    double c[9], sp[4];
+    CHECK_OK(bingham_ahrs_orientation_covariance(a, c));
+    CHECK_OK(bingham_ahrs_angular_spread(a, sp));
+    const double tr = c[0] + c[4] + c[8], eps = 1e-13 * tr;
+    int ok = all_finite(c, 9) && tr > 0.0;
+    for (int i = 0; i < 3; ++i) {
+        ok &= c[4 * i] >= 0.0;
+        for (int j = 0; j < 3; ++j) ok &= fabs(c[3 * i + j] - c[3 * j + i]) <= 1e-15 * tr;
+    }
+    for (int i = 0; i < 3; ++i) {
+        const int j = (i + 1) % 3;
+        ok &= c[4 * i] * c[4 * j] - c[3 * i + j] * c[3 * j + i] >= -eps * tr;
+    }
+    const double det = c[0] * (c[4] * c[8] - c[5] * c[7]) - c[1] * (c[3] * c[8] - c[5] * c[6]) +
+                       c[2] * (c[3] * c[7] - c[4] * c[6]);
+    ok &= det >= -eps * tr * tr;
+    const double s2 = sp[3] * sp[3];
+    ok &= fabs(tr - s2) <= 1e-12 * s2;
+    if (!ok)
+        fprintf(stderr, "    %s: cov [%g %g %g; %g %g %g; %g %g %g], trace %.17g, spread^2 %.17g\n", where, c[0], c[1],
+                c[2], c[3], c[4], c[5], c[6], c[7], c[8], tr, s2);
+    CHECK(ok);
+}
+
+static void test_ahrs_orientation_covariance(void) {
+    const char *fn = "bingham_ahrs_orientation_covariance";
+    double c[9], g[3], acc[3], mag[3];
+    bingham_ahrs *a = new_ahrs(0.01);
+    if (!a) return;
+    /* before the first sample: the identity (a uniform orientation's), trace == spread^2 */
+    fill(c, sizeof c);
+    CHECK_OK(bingham_ahrs_orientation_covariance(a, c));
+    for (int i = 0; i < 9; ++i) CHECK(c[i] == (i % 4 == 0 ? 1.0 : 0.0));
+    check_orientation_cov(a, "before the first sample");
+    /* NULLs: refused, the output untouched, the AHRS unchanged */
+    astate s0 = asnap(a);
+    fill(c, sizeof c);
+    CHECK_STATUS(bingham_ahrs_orientation_covariance(NULL, c), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "a");
+    CHECK_STATUS(bingham_ahrs_orientation_covariance(a, NULL), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "cov");
+    CHECK(untouched(c, sizeof c) && same_state(s0, asnap(a)));
+    /* after every one of 600 samples in motion with gaps (between corrections too: the process
+     * noise since the last one included) */
+    for (int k = 0; k < 600; ++k) {
+        moving_sample(k, 1, g, acc, mag);
+        CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
+        check_orientation_cov(a, "in motion");
+    }
+    /* a readout changes nothing; errors after samples leave the output untouched */
+    astate s1 = asnap(a);
+    CHECK(same_state(s1, asnap(a)));
+    fill(c, sizeof c);
+    CHECK_STATUS(bingham_ahrs_orientation_covariance(NULL, c), BINGHAM_ERR_NULL_ARGUMENT);
+    CHECK(untouched(c, sizeof c));
+    bingham_ahrs_free(a);
+
+    /* the world frame: a sensor tilted by 60 deg about x, without magnetometer: the unknown
+     * heading is the variance about world z (up); about the sensor's z axis, (0, sin 60,
+     * cos 60) in the world, it would show in the world's yy as well */
+    a = new_ahrs(0.01);
+    if (!a) return;
+    const double th = PI / 3.0, zero[3] = {0.0, 0.0, 0.0};
+    const double tilted[3] = {0.0, 9.81 * sin(th), 9.81 * cos(th)};
+    for (int k = 0; k < 500; ++k) {
+        CHECK_OK(bingham_ahrs_update(a, zero, tilted, NULL));
+        if (k % 50 == 0) check_orientation_cov(a, "tilted, 6-D");
+    }
+    CHECK_OK(bingham_ahrs_orientation_covariance(a, c));
+    if (!(c[8] > 1e3 * c[0] && c[8] > 1e3 * c[4]))
+        fprintf(stderr, "    tilted 6-D: diag %g %g %g\n", c[0], c[4], c[8]);
+    CHECK(c[8] > 1e3 * c[0] && c[8] > 1e3 * c[4]);
+    CHECK(fabs(c[2]) < 1e-3 * c[8] && fabs(c[5]) < 1e-3 * c[8]);
+
+    /* a state set with set_state: its principal spreads on the world axes. Mode (1, 0, 0, 0),
+     * columns k, j, i (z = -400, -100, -25): diag(spread[2]^2, spread[1]^2, spread[0]^2).
+     * Mode q = 90 deg about z, columns q(x)i, q(x)j, q(x)k: the body axes x, y, z, which the
+     * world sees as y, -x, z: diag(spread[1]^2, spread[0]^2, spread[2]^2) */
+    {
+        const double z[4] = {-400.0, -100.0, -25.0, 0.0};
+        const double h = sqrt(0.5), q[4] = {h, 0.0, 0.0, h};
+        const double l[4][4] = {{q[0], -q[1], -q[2], -q[3]},
+                                {q[1], q[0], -q[3], q[2]},
+                                {q[2], q[3], q[0], -q[1]},
+                                {q[3], -q[2], q[1], q[0]}};
+        double m1[16] = {0}, m2[16], sp[4];
+        for (int i = 0; i < 4; ++i) m1[i * 4 + (3 - i)] = 1.0;
+        for (int k = 0; k < 16; ++k) m2[k] = l[k / 4][(k % 4 + 1) % 4];
+        for (int which = 0; which < 2; ++which) {
+            CHECK_OK(bingham_ahrs_set_state(a, which ? m2 : m1, z));
+            CHECK_OK(bingham_ahrs_orientation_covariance(a, c));
+            CHECK_OK(bingham_ahrs_angular_spread(a, sp));
+            check_orientation_cov(a, "after set_state");
+            const double want[3] = {which ? sp[1] * sp[1] : sp[2] * sp[2], which ? sp[0] * sp[0] : sp[1] * sp[1],
+                                    which ? sp[2] * sp[2] : sp[0] * sp[0]};
+            const double tr = c[0] + c[4] + c[8];
+            for (int i = 0; i < 3; ++i) {
+                CHECK(fabs(c[4 * i] - want[i]) <= 1e-12 * tr);
+                for (int j = 0; j < 3; ++j)
+                    if (i != j) CHECK(fabs(c[3 * i + j]) <= 1e-12 * tr);
+            }
+        }
+    }
+    bingham_ahrs_free(a);
+}
+
 int main(void) {
     if (guard_pages_init()) return 1;
     (void)PI;
@@ -1133,5 +1775,9 @@ int main(void) {
     test_ahrs_batch_health();
     test_ahrs_bias_uncertainty();
     test_ahrs_latency();
+    test_ahrs_missing_times();
+    test_ahrs_update_dt();
+    test_ahrs_batch_timed();
+    test_ahrs_orientation_covariance();
     return check_summary("ahrs_api");
 }

@@ -36,6 +36,16 @@
 // - Ahrs::update_batch with `spread` and `health` (with and without the magnetometer, health
 //   without spread): row k equals health().score and uncertainty() after the same samples fed
 //   one by one through the Eigen update().
+// - Ahrs::orientation_covariance_matrix(): entry (i, j) is the C call's row-major oc[3 i + j],
+//   symmetric with eigenvalues >= 0 (Eigen's solver), trace uncertainty()^2, the identity before
+//   the first sample; in the world frame: for the tilted static sensor without magnetometer the
+//   eigenvector of the largest eigenvalue (the unknown heading) is world z, not the sensor's z
+//   axis R(q_true) e_z;
+// - Ahrs::update_dt with Eigen 3-vectors equals the std::array overload bit for bit; the timed
+//   Eigen batch (timestamps a column or a row vector) equals the std::vector one, row k's spread
+//   and health equal uncertainty() and health().score after the same samples fed as timed
+//   batches of one; a size mismatch throws BINGHAM_ERR_INVALID_DIMENSION, a timestamp before the
+//   previous one BINGHAM_ERR_INVALID_ARGUMENT naming "sample 5".
 #include <Eigen/Dense>
 
 #include "bingham_eigen.hpp"
@@ -43,6 +53,7 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <string>
 #include <type_traits>
 #include <vector>
 
@@ -336,6 +347,106 @@ static void test_ahrs() {
         CHECK(threw);
     }
     CHECK((cov - cov.transpose()).norm() <= 1e-12 * cov.norm() && cov.diagonal().minCoeff() > 0);
+    // the orientation covariance as Eigen::Matrix3d: entry (i, j) = the C call's oc[3 i + j];
+    // symmetric, positive semi-definite, its trace uncertainty()^2; the identity before a sample
+    {
+        const Eigen::Matrix3d oc = a.orientation_covariance_matrix();
+        double occ[9];
+        CHECK_OK(bingham_ahrs_orientation_covariance(a.get(), occ));
+        bool same_oc = true;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) same_oc = same_oc && oc(i, j) == occ[3 * i + j];
+        CHECK(same_oc && oc == oc.transpose());
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(oc);
+        CHECK(es.eigenvalues().minCoeff() >= -1e-15 * oc.trace());
+        CHECK_CLOSE(oc.trace(), a.uncertainty() * a.uncertainty(), 1e-12);
+        CHECK(bingham::Ahrs(0.01).orientation_covariance_matrix() == Eigen::Matrix3d::Identity());
+    }
+    // in the world frame: the same tilted sensor without a magnetometer has an unknown heading,
+    // the variance about world z (up), not about the sensor's z axis R(q_true) e_z
+    {
+        bingham::Ahrs six(0.01);
+        for (int k = 0; k < 300; ++k) six.update(Vector3d::Zero(), acc);
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(six.orientation_covariance_matrix());
+        const Vector3d top = es.eigenvectors().col(2);  // eigenvalues ascending
+        const double along_up = std::abs(top.dot(Vector3d::UnitZ())), along_sensor_z = std::abs(top.dot(r.col(2)));
+        if (!(along_up > 1.0 - 1e-6 && es.eigenvalues()(2) > 1e3 * es.eigenvalues()(1)))
+            std::fprintf(stderr, "    6-D: top eigenvector . up = %.9f, eigenvalues %g %g %g\n", along_up,
+                         es.eigenvalues()(0), es.eigenvalues()(1), es.eigenvalues()(2));
+        CHECK(along_up > 1.0 - 1e-6 && es.eigenvalues()(2) > 1e3 * es.eigenvalues()(1));
+        CHECK(along_sensor_z < 0.99);  // (the tilt is large enough to tell the two apart)
+    }
+    // update_dt with Eigen vectors: the std::array overload's result, bit for bit; the timed
+    // Eigen batch (timestamps as a column or a row vector, any storage order of the rows) equals
+    // the std::vector one and the per-sample spread and health; sizes checked
+    {
+        bingham::Ahrs e1 = a.clone(), e2 = a.clone();
+        for (int k = 0; k < 20; ++k) {
+            const Vector3d gk(0.01 * k, -0.02, k % 7 == 3 ? std::nan("") : 0.03);
+            const double h = 0.01 * (1.0 + 0.25 * std::sin(0.9 * k));
+            if (k % 2) {
+                e1.update_dt(h, gk, acc, mag);
+                e2.update_dt(h, {gk(0), gk(1), gk(2)}, {acc(0), acc(1), acc(2)}, {mag(0), mag(1), mag(2)});
+            } else {
+                e1.update_dt(h, gk, acc);
+                e2.update_dt(h, {gk(0), gk(1), gk(2)}, {acc(0), acc(1), acc(2)});
+            }
+        }
+        CHECK(same(e1.state(), e2.state()) && e1.orientation_covariance() == e2.orientation_covariance());
+        const int n = 40;
+        Eigen::MatrixXd gm(n, 3), am(n, 3), mm(n, 3);
+        Eigen::VectorXd tc(n);
+        std::vector<double> tv, gv, av, mv;
+        double tk = 3.0;
+        for (int k = 0; k < n; ++k) {
+            tk += 0.01 * (1.0 + 0.4 * std::sin(1.1 * k)) + (k % 13 == 12 ? 0.03 : 0.0);
+            tc(k) = tk;
+            tv.push_back(tk);
+            const Vector3d gk(0.2 * std::sin(0.2 * k), k % 9 == 4 ? std::nan("") : -0.02, 0.03);
+            gm.row(k) = gk.transpose();
+            am.row(k) = acc.transpose();
+            mm.row(k) = mag.transpose();
+            for (int c = 0; c < 3; ++c) {
+                gv.push_back(gk(c));
+                av.push_back(acc(c));
+                mv.push_back(mag(c));
+            }
+        }
+        bingham::Ahrs t1 = e1.clone(), t2 = e1.clone(), t3 = e1.clone(), one = e1.clone();
+        Eigen::VectorXd sp, hs;
+        const auto q1 = t1.update_batch(tc, gm, am, mm, &sp, &hs);
+        const Eigen::RowVectorXd tr = tc.transpose();
+        const auto q3 = t3.update_batch(tr, gm, am, mm);
+        const std::vector<double> q2 = t2.update_batch(tv, gv, av, mv);
+        CHECK(q1.rows() == n && sp.size() == n && hs.size() == n && q3 == q1);
+        bool q_ok = true, row_ok = true;
+        for (int k = 0; k < n; ++k) {
+            for (int c = 0; c < 4; ++c) q_ok = q_ok && q1(k, c) == q2[static_cast<std::size_t>(4 * k + c)];
+            const std::vector<double> tk1 = {tv[static_cast<std::size_t>(k)]};
+            (void)one.update_batch(tk1, {gv[3 * k], gv[3 * k + 1], gv[3 * k + 2]}, {av[3 * k], av[3 * k + 1], av[3 * k + 2]},
+                                   {mv[3 * k], mv[3 * k + 1], mv[3 * k + 2]});
+            row_ok = row_ok && sp(k) == one.uncertainty() && hs(k) == one.health().score;
+        }
+        CHECK(q_ok && row_ok && same(t1.state(), t2.state()) && same(t1.state(), one.state()));
+        bool threw = false;
+        try {
+            (void)t1.update_batch(Eigen::VectorXd(n - 1), gm, am, mm);
+        } catch (const bingham::Error &e) {
+            threw = e.status() == BINGHAM_ERR_INVALID_DIMENSION;
+        }
+        CHECK(threw);
+        // a timestamp before the previous one: the C status, "sample k", the rows before done
+        threw = false;
+        Eigen::VectorXd tb = tc.array() + (tc(n - 1) - tc(0) + 0.01);  // after t1's last timestamp
+        tb(5) = tb(4) - 0.01;
+        try {
+            (void)t1.update_batch(tb, gm, am, mm);
+        } catch (const bingham::Error &e) {
+            threw = e.status() == BINGHAM_ERR_INVALID_ARGUMENT &&
+                    std::string(e.what()).find("sample 5") != std::string::npos;
+        }
+        CHECK(threw);
+    }
     const double bias_std = bingham::ahrs_default_params(0.01).bias_std;
     CHECK(bingham::Ahrs(0.01).gyro_bias_covariance_matrix() == Eigen::Matrix3d::Identity() * (bias_std * bias_std));
     CHECK(a.uncertainty() > 0 && a.uncertainty() < 0.1);

@@ -20,7 +20,16 @@
 //   Gated{accepted, surprise} equals bingham_filter_update_gated's outputs on a C handle in the
 //   same state, and the states stay equal (a measurement in (x, y, z, w) order gated out, the
 //   filter unchanged); NaN / negative max_surprise throw with the C call's status and message;
-// - Ahrs::health() equals bingham_ahrs_health field by field; all zero on a fresh AHRS.
+// - Ahrs::health() equals bingham_ahrs_health field by field (the missing times included); all
+//   zero on a fresh AHRS.
+// - Ahrs::update_dt, the timed Ahrs::update_batch(t, gyr, acc, mag) and
+//   Ahrs::orientation_covariance(): bit for bit the C calls (update_dt, _update_batch_timed,
+//   _orientation_covariance) on a handle fed the same, with jittered steps and NaN rows (gyroscope
+//   gaps included); update_dt(sample_time) == update; uniform timestamps == the untimed batch;
+//   a bad dt and a timestamp not after the previous one throw with the C call's status and
+//   message ("sample 7"), the AHRS unchanged resp. in the C handle's state; a NaN gyroscope
+//   sample accepted as by the C call (gyr_missing_time = sample_time), a gyroscope turning by
+//   more than 1e6 rad refused; sizes checked before the library is called; moved-from throws.
 // - bingham::NonlinearOptions{} holds the defaults of bingham_nonlinear_options_default.
 //
 // Built as C++17 and as C++20 with -Wall -Wextra -Werror -pedantic (tests/c_tests.rs) and under
@@ -801,7 +810,194 @@ static bool same_health(const bingham_ahrs_health_report &a, const bingham_ahrs_
     return a.score == b.score && a.gravity_score == b.gravity_score && a.tilt_score == b.tilt_score &&
            a.heading_score == b.heading_score && a.tilt_innovation == b.tilt_innovation &&
            a.heading_innovation == b.heading_innovation && a.mag_rejected == b.mag_rejected && a.mag_dip == b.mag_dip &&
-           a.has_mag_reference == b.has_mag_reference;
+           a.has_mag_reference == b.has_mag_reference && a.gyr_missing_time == b.gyr_missing_time &&
+           a.acc_missing_time == b.acc_missing_time && a.mag_missing_time == b.mag_missing_time;
+}
+
+// Everything the getters of a C handle show, for bit-for-bit comparisons.
+struct CState {
+    double q[4], m[16], z[4], sp[4], bias[3], bcov[9], ocov[9];
+    bingham_ahrs_health_report h;
+};
+static CState c_state(const bingham_ahrs *c) {
+    CState s{};
+    CHECK_OK(bingham_ahrs_quaternion(c, s.q));
+    CHECK_OK(bingham_ahrs_state(c, s.m, s.z));
+    CHECK_OK(bingham_ahrs_angular_spread(c, s.sp));
+    CHECK_OK(bingham_ahrs_gyro_bias(c, s.bias));
+    CHECK_OK(bingham_ahrs_gyro_bias_covariance(c, s.bcov));
+    CHECK_OK(bingham_ahrs_orientation_covariance(c, s.ocov));
+    CHECK_OK(bingham_ahrs_health(c, &s.h));
+    return s;
+}
+static bool same_c_state(const CState &a, const CState &b) {
+    return std::memcmp(a.q, b.q, sizeof a.q) == 0 && std::memcmp(a.m, b.m, sizeof a.m) == 0 &&
+           std::memcmp(a.z, b.z, sizeof a.z) == 0 && std::memcmp(a.sp, b.sp, sizeof a.sp) == 0 &&
+           std::memcmp(a.bias, b.bias, sizeof a.bias) == 0 && std::memcmp(a.bcov, b.bcov, sizeof a.bcov) == 0 &&
+           std::memcmp(a.ocov, b.ocov, sizeof a.ocov) == 0 && same_health(a.h, b.h);
+}
+
+// Sample k of a turning stream (rad/s, m/s^2, any unit) as three arrays.
+static void ahrs_sample(int k, std::array<double, 3> &g, std::array<double, 3> &ac, std::array<double, 3> &mg) {
+    g = {0.1, -0.05, 0.2 * std::sin(0.1 * k)};
+    ac = {0.3, -0.2, 9.7};
+    mg = {0.1, 20.0, -40.0};
+}
+
+// update_dt, the timed batch, the orientation covariance and NaN gyroscope samples: bit for bit
+// the C calls on a handle fed the same; errors with the C call's status and message, the AHRS
+// unchanged.
+static void test_ahrs_timing() {
+    const double dt = 0.01;
+    const std::array<double, 3> nan3 = {std::nan(""), std::nan(""), std::nan("")};
+    bingham::Ahrs a(dt), u(dt);
+    bingham_ahrs_params p;
+    CHECK_OK(bingham_ahrs_params_default(dt, &p));
+    bingham_ahrs *c = nullptr;
+    CHECK_OK(bingham_ahrs_new(&p, &c));
+    // before the first sample: the identity covariance
+    {
+        const std::array<double, 9> oc = a.orientation_covariance();
+        for (std::size_t i = 0; i < 9; ++i) CHECK(oc[i] == (i % 4 == 0 ? 1.0 : 0.0));
+    }
+    // update_dt with and without the magnetometer, jittered steps, NaN rows (a gyroscope gap
+    // too); update_dt(sample_time) == update on a third AHRS
+    bool same_all = true, same_update = true;
+    for (int k = 0; k < 120; ++k) {
+        std::array<double, 3> g, ac, mg;
+        ahrs_sample(k, g, ac, mg);
+        if (k % 11 == 4) g = nan3;
+        if (k % 13 == 6) ac[1] = std::nan("");
+        const double h = k % 3 == 0 ? dt : dt * (1.0 + 0.2 * std::sin(1.3 * k));
+        if (k % 4 == 1) {
+            a.update_dt(h, g, ac);
+            CHECK_OK(bingham_ahrs_update_dt(c, h, g.data(), ac.data(), nullptr));
+        } else {
+            a.update_dt(h, g, ac, mg);
+            CHECK_OK(bingham_ahrs_update_dt(c, h, g.data(), ac.data(), mg.data()));
+        }
+        same_all = same_all && same_c_state(c_state(a.get()), c_state(c));
+        // update_dt(sample_time) and update: one AHRS each, the same samples
+        bingham::Ahrs v = u.clone();
+        u.update_dt(dt, g, ac, mg);
+        v.update(g, ac, mg);
+        same_update = same_update && same_c_state(c_state(u.get()), c_state(v.get()));
+    }
+    CHECK(same_all && same_update);
+    // the orientation covariance: the C call's, bit for bit; symmetric, trace = uncertainty()^2
+    {
+        double oc[9];
+        CHECK_OK(bingham_ahrs_orientation_covariance(c, oc));
+        const std::array<double, 9> aw = a.orientation_covariance();
+        CHECK(std::memcmp(aw.data(), oc, sizeof oc) == 0);
+        CHECK(aw[1] == aw[3] && aw[2] == aw[6] && aw[5] == aw[7]);
+        const double s2 = a.uncertainty() * a.uncertainty();
+        CHECK_CLOSE(aw[0] + aw[4] + aw[8], s2, 1e-12);
+    }
+    // a bad dt throws with the C call's status and message, the AHRS unchanged
+    for (const double bad : {0.0, -0.01, std::nan(""), HUGE_VAL, 1e-7, 10.5}) {
+        const CState before = c_state(a.get());
+        std::array<double, 3> g, ac, mg;
+        ahrs_sample(200, g, ac, mg);
+        expect_error([&] { a.update_dt(bad, g, ac, mg); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                     [&] { return bingham_ahrs_update_dt(c, bad, g.data(), ac.data(), mg.data()); }, "a bad dt");
+        CHECK(bingham::last_error_message().find("dt") != std::string::npos);
+        CHECK(same_c_state(before, c_state(a.get())) && same_c_state(before, c_state(c)));
+    }
+    // the timed batch: the C call's quaternions and final state, bit for bit; split == one call;
+    // uniform timestamps == the untimed batch
+    {
+        const std::size_t n = 60;
+        std::vector<double> t(n), gyr, acc, mag;
+        double tk = 7.0;
+        for (std::size_t k = 0; k < n; ++k) {
+            tk += dt * (1.0 + 0.3 * std::sin(0.7 * static_cast<double>(k))) + (k % 17 == 16 ? 2 * dt : 0.0);
+            t[k] = tk;
+            std::array<double, 3> g, ac, mg;
+            ahrs_sample(static_cast<int>(300 + k), g, ac, mg);
+            if (k % 9 == 2) g = nan3;
+            gyr.insert(gyr.end(), g.begin(), g.end());
+            acc.insert(acc.end(), ac.begin(), ac.end());
+            mag.insert(mag.end(), mg.begin(), mg.end());
+        }
+        bingham::Ahrs b = a.clone();
+        const std::vector<double> qa = a.update_batch(t, gyr, acc, mag);
+        std::vector<double> qc(4 * n);
+        CHECK_OK(bingham_ahrs_update_batch_timed(c, n, t.data(), gyr.data(), acc.data(), mag.data(), qc.data(),
+                                                 nullptr, nullptr));
+        CHECK(same(qa, qc) && same_c_state(c_state(a.get()), c_state(c)));
+        const std::size_t cut = 23;
+        const auto part = [&](std::size_t from, std::size_t to) {
+            return std::vector<double>(t.begin() + static_cast<std::ptrdiff_t>(from),
+                                       t.begin() + static_cast<std::ptrdiff_t>(to));
+        };
+        const auto rows = [&](const std::vector<double> &v, std::size_t from, std::size_t to) {
+            return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(3 * from),
+                                       v.begin() + static_cast<std::ptrdiff_t>(3 * to));
+        };
+        std::vector<double> qb = b.update_batch(part(0, cut), rows(gyr, 0, cut), rows(acc, 0, cut), rows(mag, 0, cut));
+        const std::vector<double> qb2 =
+            b.update_batch(part(cut, n), rows(gyr, cut, n), rows(acc, cut, n), rows(mag, cut, n));
+        CHECK(qb.size() == 4 * cut && qb2.size() == 4 * (n - cut));
+        qb.insert(qb.end(), qb2.begin(), qb2.end());
+        CHECK(same(qb, qa) && same_c_state(c_state(b.get()), c_state(a.get())));
+        bingham_ahrs *d = nullptr;
+        CHECK_OK(bingham_ahrs_clone(c, &d));
+        bingham::Ahrs e = a.clone();
+        // uniform timestamps == untimed, bit for bit
+        std::vector<double> tu(n);
+        for (std::size_t k = 0; k < n; ++k) tu[k] = 1000.0 + dt * static_cast<double>(k);
+        bingham::Ahrs f = e.clone(), g = e.clone();
+        f.update({0, 0, 0}, {0, 0, 9.81});  // an untimed sample: the next timed batch starts with sample_time
+        g.update({0, 0, 0}, {0, 0, 9.81});
+        const std::vector<double> qf = f.update_batch(tu, gyr, acc, mag), qg = g.update_batch(gyr, acc, mag);
+        CHECK(same(qf, qg) && same_c_state(c_state(f.get()), c_state(g.get())));
+        // a timestamp not after the previous one: throws with the C call's status and message
+        // ("sample k"), the samples before it processed
+        std::vector<double> tb(n);
+        for (std::size_t k = 0; k < n; ++k) tb[k] = t[n - 1] + dt * static_cast<double>(k + 1);  // after e's last
+        tb[7] = tb[6];
+        const CState before = c_state(e.get());
+        CHECK(same_c_state(before, c_state(d)));
+        expect_error([&] { (void)e.update_batch(tb, gyr, acc, mag); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                     [&] {
+                         std::vector<double> qd(4 * n);
+                         return bingham_ahrs_update_batch_timed(d, n, tb.data(), gyr.data(), acc.data(), mag.data(),
+                                                                qd.data(), nullptr, nullptr);
+                     },
+                     "a timestamp not after the previous one");
+        CHECK(bingham::last_error_message().find("sample 7") != std::string::npos);
+        CHECK(same_c_state(c_state(e.get()), c_state(d)) && !same_c_state(before, c_state(e.get())));
+        bingham_ahrs_free(d);
+        // sizes: t and the rows must agree (before the library is called)
+        expect_error([&] { (void)e.update_batch(part(0, 5), rows(gyr, 0, 6), rows(acc, 0, 6), {}); },
+                     BINGHAM_ERR_INVALID_DIMENSION, "timed batch size mismatch");
+        CHECK(e.update_batch(std::vector<double>{}, {}, {}, {}).empty());
+    }
+    // a NaN gyroscope sample is a gap: accepted, as by the C call; a finite gyroscope turning by
+    // more than 1e6 rad in a sample throws with the C call's status and message, nothing changed
+    {
+        a.update({std::nan(""), 0.0, 0.1}, {0.3, -0.2, 9.7});
+        const std::array<double, 3> gn = {std::nan(""), 0.0, 0.1}, an = {0.3, -0.2, 9.7};
+        CHECK_OK(bingham_ahrs_update(c, gn.data(), an.data(), nullptr));
+        const CState s = c_state(c);
+        CHECK(same_c_state(c_state(a.get()), s) && s.h.gyr_missing_time == dt);
+        expect_error([&] { a.update_dt(0.1, {5e7, 0.0, 0.0}, {0.3, -0.2, 9.7}); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                     [&] {
+                         const double gg[3] = {5e7, 0.0, 0.0};
+                         return bingham_ahrs_update_dt(c, 0.1, gg, an.data(), nullptr);
+                     },
+                     "a gyroscope turning by 5e6 rad");
+        CHECK(same_c_state(c_state(a.get()), s) && same_c_state(c_state(c), s));
+    }
+    // moved-from: the new methods throw BINGHAM_ERR_NULL_ARGUMENT
+    bingham::Ahrs moved(std::move(a));
+    expect_error([&] { a.update_dt(dt, {0, 0, 0}, {0, 0, 9.81}); }, BINGHAM_ERR_NULL_ARGUMENT, "update_dt, moved-from");
+    expect_error([&] { (void)a.update_batch(std::vector<double>{1.0}, {0, 0, 0}, {0, 0, 9.81}, {}); },
+                 BINGHAM_ERR_NULL_ARGUMENT, "timed batch, moved-from");
+    expect_error([&] { (void)a.orientation_covariance(); }, BINGHAM_ERR_NULL_ARGUMENT,
+                 "orientation_covariance, moved-from");
+    bingham_ahrs_free(c);
 }
 
 static void test_ahrs() {
@@ -860,7 +1056,10 @@ static void test_ahrs() {
         const bingham_ahrs_health_report h0 = bingham::Ahrs(pw).health();
         CHECK(h0.score == 0 && h0.gravity_score == 0 && h0.tilt_score == 0 && h0.heading_score == 0 &&
               h0.tilt_innovation == 0 && h0.heading_innovation == 0 && h0.mag_rejected == 0 && h0.mag_dip == 0 &&
-              h0.has_mag_reference == 0);
+              h0.has_mag_reference == 0 && h0.gyr_missing_time == 0 && h0.acc_missing_time == 0 &&
+              h0.mag_missing_time == 0);
+        // the last sample had no magnetometer: its missing time is one sample_time
+        CHECK(hw.mag_missing_time == dt && hw.gyr_missing_time == 0 && hw.acc_missing_time == 0);
     }
     // the latency readout: none yet after 51 samples (nullopt for BINGHAM_ERR_NOT_CONVERGED)
     double lat = -1.0;
@@ -868,14 +1067,15 @@ static void test_ahrs() {
     CHECK(!a.mag_latency_estimate().has_value());
     CHECK(pw.mag_latency == BINGHAM_AHRS_LATENCY_ESTIMATE && pw.acc_latency == 0.0);
 
-    // a refused sample throws and leaves the AHRS unchanged
+    // a refused sample (a gyroscope turning by more than 1e6 rad in the sample) throws and
+    // leaves the AHRS unchanged
     const bingham::Distribution before = a.state();
-    expect_error([&] { a.update({0, 0, std::nan("")}, {0, 0, 9.81}); }, BINGHAM_ERR_INVALID_ARGUMENT,
+    expect_error([&] { a.update({0, 0, 1e12}, {0, 0, 9.81}); }, BINGHAM_ERR_INVALID_ARGUMENT,
                  [&] {
-                     const double gg[3] = {0, 0, std::nan("")}, aa[3] = {0, 0, 9.81};
+                     const double gg[3] = {0, 0, 1e12}, aa[3] = {0, 0, 9.81};
                      return bingham_ahrs_update(c, gg, aa, nullptr);
                  },
-                 "AHRS sample with NaN");
+                 "AHRS sample turning too far");
     CHECK(same(a.state(), before));
     expect_error([] { bingham::Ahrs bad(-1.0); }, BINGHAM_ERR_INVALID_ARGUMENT,
                  [] {
@@ -962,6 +1162,7 @@ int main() {
         test_filter_world();
         test_spin_filter();
         test_ahrs();
+        test_ahrs_timing();
     } catch (const std::exception &e) {
         std::fprintf(stderr, "unexpected exception: %s\n", e.what());
         return 1;

@@ -52,7 +52,7 @@
 /**
  * Minor version of the header.
  */
-#define BINGHAM_VERSION_MINOR 3
+#define BINGHAM_VERSION_MINOR 4
 
 /**
  * Patch version of the header.
@@ -147,6 +147,14 @@
  * Rust) takes the rate instead.
  */
 #define BINGHAM_AHRS_MAX_SAMPLE_TIME 1.0
+
+/**
+ * The largest time step (s) of one sample (`BINGHAM_AHRS_MAX_STEP_TIME` in C): a gap up to 10 s
+ * is predicted through (the gyroscope's last rate held, the spread widened by what that
+ * cannot know); a longer one is refused, as it is more likely a timestamp error (ms for s, a
+ * clock reset) than a stream that resumed.
+ */
+#define BINGHAM_AHRS_MAX_STEP_TIME 10.0
 
 /**
  * The smallest process noise per step (rad) the AHRS accepts (`gyro_noise·√sample_time`): below
@@ -613,6 +621,23 @@ typedef struct bingham_ahrs_health_report {
      * 1 when a magnetic reference exists (a field has been seen), else 0.
      */
     int32_t has_mag_reference;
+    /**
+     * Seconds since the last gyroscope sample (0 when the last sample had one; a NaN row is
+     * a missing sample): the AHRS carries the last rate through a gap and widens the spread.
+     */
+    double gyr_missing_time;
+    /**
+     * Seconds since the last usable accelerometer sample (0 when the last sample had one; a
+     * NaN row or free fall is none): without it there is no tilt evidence.
+     */
+    double acc_missing_time;
+    /**
+     * Seconds since the last magnetometer sample (0 when the last sample had one; NULL, a NaN
+     * row or a zero field is none; counted from the first sample for a magnetometer never
+     * seen): without it there is no heading evidence. A field the disturbance test refuses
+     * is a sample (see `mag_rejected`).
+     */
+    double mag_missing_time;
 } bingham_ahrs_health_report;
 
 #ifdef __cplusplus
@@ -1778,10 +1803,13 @@ void bingham_ahrs_free(struct bingham_ahrs *a);
 enum bingham_status bingham_ahrs_clone(const struct bingham_ahrs *a, struct bingham_ahrs **out);
 
 /**
- * Processes one sample.
+ * Processes one sample, taken `sample_time` (the parameters') after the previous one; with
+ * its own time step: `bingham_ahrs_update_dt()`.
  *
- * - `gyr`: angular rate, rad/s, sensor frame (3 doubles). Required in every sample: a NaN or
- *   ±Inf entry refuses the sample.
+ * - `gyr`: angular rate, rad/s, sensor frame (3 doubles). A NaN or ±Inf entry means "no
+ *   gyroscope sample" at this time (a gap, not an error): the orientation is carried on with
+ *   the last rate, and what that cannot know widens the spread (`gyr_missing_time` of the
+ *   health readout counts the gap).
  * - `acc`: specific force, m/s², sensor frame (+g up at rest). A NaN or ±Inf entry means "no
  *   accelerometer sample" at this time (not an error): the gyroscope and the magnetometer of
  *   the sample are still used. Its update is also skipped (not an error) when
@@ -1792,9 +1820,10 @@ enum bingham_status bingham_ahrs_clone(const struct bingham_ahrs *a, struct bing
  *   (not an error). A zero field, a field along the vertical or a disturbed field is skipped.
  *
  * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `gyr`, `acc`), `BINGHAM_ERR_INVALID_ARGUMENT`
- * (NaN/Inf in `gyr`; a first sample without a finite accelerometer showing gravity),
- * `BINGHAM_ERR_NOT_CONVERGED` / `BINGHAM_ERR_NUMERICAL` (internal). On error the AHRS is
- * unchanged: the sample is refused.
+ * (a gyroscope sample turning by more than 1e6 rad in one sample: not a rate; a
+ * first sample without a finite accelerometer showing gravity), `BINGHAM_ERR_NOT_CONVERGED`
+ * / `BINGHAM_ERR_NUMERICAL` (internal). On error the AHRS is unchanged: the sample is
+ * refused.
  *
  * # Safety
  * `a`: a live handle; `gyr`, `acc`: 3 readable doubles each; `mag`: `NULL` or 3 readable
@@ -1806,19 +1835,44 @@ enum bingham_status bingham_ahrs_update(struct bingham_ahrs *a,
                                         const double *mag);
 
 /**
+ * Processes one sample taken `dt` seconds after the previous one (its own time step: jitter,
+ * dropped packets, a variable rate), otherwise as `bingham_ahrs_update()`. The gyroscope's
+ * turn, the process noise, the bias's random walk and the filters' time constants use `dt`;
+ * a gyroscope sample is taken to cover one `sample_time`, and a longer interval's remainder
+ * (dropped samples) is bridged with the mean of the last and this rate, its uncertainty added
+ * to the spread. `dt` of the very first sample is not used; a `dt` within a millionth of
+ * `sample_time` is taken as `sample_time` (uniformly spaced timestamps then give the results of
+ * `bingham_ahrs_update()` bit for bit).
+ *
+ * Errors: those of `bingham_ahrs_update()`, and `BINGHAM_ERR_INVALID_ARGUMENT` for `dt` not
+ * finite or outside `BINGHAM_AHRS_MIN_SAMPLE_TIME` (1e-6 s) to `BINGHAM_AHRS_MAX_STEP_TIME`
+ * (10 s). On error the AHRS is unchanged.
+ *
+ * # Safety
+ * `a`: a live handle; `gyr`, `acc`: 3 readable doubles each; `mag`: `NULL` or 3 readable
+ * doubles.
+ */
+enum bingham_status bingham_ahrs_update_dt(struct bingham_ahrs *a,
+                                           double dt,
+                                           const double *gyr,
+                                           const double *acc,
+                                           const double *mag);
+
+/**
  * Processes `n` samples and writes the orientation after each: as `n` calls of
  * `bingham_ahrs_update()` followed by `bingham_ahrs_quaternion()`.
  *
  * - `gyr`, `acc`: n×3 row-major; `mag`: n×3 row-major or `NULL`.
  * - `quat`: n×4 row-major output (w, x, y, z per row, sensor → world ENU, w ≥ 0).
  *
- * Per channel, as in `bingham_ahrs_update()`: a row of `acc` or `mag` holding NaN (or ±Inf)
- * means "no sample" of that sensor at that time, so sensors sampled at lower rates than the
- * gyroscope, or with gaps, fit in one batch (fill their missing rows with NaN); every row of
- * `gyr` must be finite.
+ * Per channel, as in `bingham_ahrs_update()`: a row of `gyr`, `acc` or `mag` holding NaN (or
+ * ±Inf) means "no sample" of that sensor at that time, so sensors sampled at lower rates than
+ * the gyroscope, or with gaps, fit in one batch (fill their missing rows with NaN); a missing
+ * gyroscope row is a gap the AHRS carries the orientation through.
  *
- * A refused sample (see `bingham_ahrs_update()`: NaN/Inf in its `gyr` row, or a first sample
- * without a finite accelerometer showing gravity) stops the batch: the samples before it are
+ * A refused sample (see `bingham_ahrs_update()`: a gyroscope row turning by more than
+ * 1e6 rad, or a first sample without a finite accelerometer showing gravity)
+ * stops the batch: the samples before it are
  * processed and their rows of `quat` written, the refused one changes nothing, the rest are
  * untouched; the error message names the sample's index ("sample k: ..."). `n = 0` does
  * nothing.
@@ -1871,6 +1925,32 @@ enum bingham_status bingham_ahrs_update_batch_health(struct bingham_ahrs *a,
                                                      double *quat,
                                                      double *spread,
                                                      double *health);
+
+/**
+ * As `bingham_ahrs_update_batch_health()`, with a timestamp per sample: `t` (n doubles,
+ * seconds, strictly increasing, any origin) is when each sample was taken, and each is
+ * processed with its own time step, as `bingham_ahrs_update_dt()`: `t[k] - t[k-1]`; for
+ * `t[0]`, the step from the last timestamp of the previous timed batch on this AHRS, or
+ * `sample_time` if there was none (or an untimed update came since). So dropped packets,
+ * jitter and a variable rate are modelled; a batch may be split anywhere.
+ *
+ * Errors: those of `bingham_ahrs_update_batch_health()`, and `BINGHAM_ERR_INVALID_ARGUMENT`
+ * for a timestamp that is not finite or not after the previous one, or a step above
+ * `BINGHAM_AHRS_MAX_STEP_TIME` (10 s): the batch stops there, as for any refused sample
+ * (the rows before it written, the message names the index).
+ *
+ * # Safety
+ * As `bingham_ahrs_update_batch_health()`; `t`: n readable doubles.
+ */
+enum bingham_status bingham_ahrs_update_batch_timed(struct bingham_ahrs *a,
+                                                    size_t n,
+                                                    const double *t,
+                                                    const double *gyr,
+                                                    const double *acc,
+                                                    const double *mag,
+                                                    double *quat,
+                                                    double *spread,
+                                                    double *health);
 
 /**
  * The current orientation estimate (the mode of the Bingham state): sensor → world (ENU),
@@ -1977,6 +2057,23 @@ enum bingham_status bingham_ahrs_gyro_bias(const struct bingham_ahrs *a, double 
  * `a`: a live handle; `cov`: 9 writable doubles.
  */
 enum bingham_status bingham_ahrs_gyro_bias_covariance(const struct bingham_ahrs *a, double *cov);
+
+/**
+ * The covariance of the orientation error, 3×3 row-major in rad², for
+ * `sensor_msgs/Imu.orientation_covariance`: the error as a rotation vector `phi` in the world
+ * frame (ENU: x east, y north, z up; REP 103), `q_true = exp(phi/2) ⊗ q_est`, with `q_est`
+ * the orientation of `bingham_ahrs_quaternion()` (sensor → world). From the state's second
+ * moments plus the process noise since the last correction: its trace is the square of the
+ * total angular spread (`bingham_ahrs_angular_spread()`'s `spread[3]`). Before the first
+ * sample: the identity (a uniform orientation's spread).
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `cov`), `BINGHAM_ERR_NUMERICAL` (internal). On
+ * error nothing is written.
+ *
+ * # Safety
+ * `a`: a live handle; `cov`: 9 writable doubles.
+ */
+enum bingham_status bingham_ahrs_orientation_covariance(const struct bingham_ahrs *a, double *cov);
 
 /**
  * The online estimate of the magnetometer's latency behind the gyroscope, in seconds, from the

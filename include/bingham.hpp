@@ -1180,19 +1180,38 @@ public:
     bingham_ahrs *get() noexcept { return a_; }
     const bingham_ahrs *get() const noexcept { return a_; }
 
-    /// One sample without magnetometer (6-D: heading unobserved).
+    /// One sample without magnetometer (6-D: heading unobserved), taken sample_time after the
+    /// previous one. A NaN/Inf entry means "no sample" of that sensor (the gyroscope's a gap the
+    /// AHRS carries the orientation through, widening the spread); throws for a gyroscope turning
+    /// by more than 1e6 rad in the sample, or a first sample without a finite accelerometer.
     void update(const std::array<double, 3> &gyr, const std::array<double, 3> &acc) {
         require("bingham::Ahrs::update");
         detail::check(bingham_ahrs_update(a_, gyr.data(), acc.data(), nullptr));
     }
-    /// One sample with magnetometer.
+    /// One sample with magnetometer (as above).
     void update(const std::array<double, 3> &gyr, const std::array<double, 3> &acc, const std::array<double, 3> &mag) {
         require("bingham::Ahrs::update");
         detail::check(bingham_ahrs_update(a_, gyr.data(), acc.data(), mag.data()));
     }
+    /// One sample without magnetometer taken `dt` seconds after the previous one (its own time
+    /// step: jitter, dropped packets; bingham_ahrs_update_dt()); otherwise as update().
+    /// update_dt(sample_time, ...) is update(...), bit for bit. Throws
+    /// Error(BINGHAM_ERR_INVALID_ARGUMENT) for `dt` not finite or outside
+    /// BINGHAM_AHRS_MIN_SAMPLE_TIME .. BINGHAM_AHRS_MAX_STEP_TIME (1e-6 .. 10 s), the AHRS unchanged.
+    void update_dt(double dt, const std::array<double, 3> &gyr, const std::array<double, 3> &acc) {
+        require("bingham::Ahrs::update_dt");
+        detail::check(bingham_ahrs_update_dt(a_, dt, gyr.data(), acc.data(), nullptr));
+    }
+    /// One sample with magnetometer taken `dt` seconds after the previous one (as above).
+    void update_dt(double dt, const std::array<double, 3> &gyr, const std::array<double, 3> &acc,
+                   const std::array<double, 3> &mag) {
+        require("bingham::Ahrs::update_dt");
+        detail::check(bingham_ahrs_update_dt(a_, dt, gyr.data(), acc.data(), mag.data()));
+    }
     /// n samples (gyr, acc, mag: n x 3 row-major; mag empty for none): returns the n x 4
-    /// quaternions (w, x, y, z per row). A refused sample throws; the samples before it have
-    /// been processed (as in the C API).
+    /// quaternions (w, x, y, z per row). A row holding NaN is "no sample" of that sensor. A
+    /// refused sample throws (the message names it, "sample k: ..."); the samples before it
+    /// have been processed (as in the C API).
     std::vector<double> update_batch(const std::vector<double> &gyr, const std::vector<double> &acc,
                                      const std::vector<double> &mag = {}) {
         require("bingham::Ahrs::update_batch");
@@ -1203,6 +1222,26 @@ public:
         if (n == 0) return q;
         detail::check(
             bingham_ahrs_update_batch(a_, n, gyr.data(), acc.data(), mag.empty() ? nullptr : mag.data(), q.data()));
+        return q;
+    }
+    /// n samples with their timestamps `t` (n values, seconds, strictly increasing, any origin;
+    /// bingham_ahrs_update_batch_timed()): sample k's time step is t[k] - t[k-1], the first
+    /// one's from the last timestamp of the previous timed batch (or sample_time if there was
+    /// none, or an untimed update came since); gyr, acc, mag (empty for none) n x 3 row-major as
+    /// in update_batch(). Returns the n x 4 quaternions. With uniformly spaced timestamps it is
+    /// update_batch() bit for bit; a batch may be split anywhere. A timestamp not finite or not
+    /// after the previous one, a step above 10 s or a refused sample throws (message "sample k:
+    /// ..."); the samples before it have been processed.
+    std::vector<double> update_batch(const std::vector<double> &t, const std::vector<double> &gyr,
+                                     const std::vector<double> &acc, const std::vector<double> &mag) {
+        require("bingham::Ahrs::update_batch");
+        const std::size_t n = t.size();
+        detail::require_dim(gyr.size() == 3 * n && acc.size() == 3 * n && (mag.empty() || mag.size() == 3 * n),
+                            "bingham::Ahrs::update_batch", "t has n entries; gyr, acc (and mag) must all be n x 3");
+        std::vector<double> q(4 * n);
+        if (n == 0) return q;
+        detail::check(bingham_ahrs_update_batch_timed(a_, n, t.data(), gyr.data(), acc.data(),
+                                                      mag.empty() ? nullptr : mag.data(), q.data(), nullptr, nullptr));
         return q;
     }
 #if BINGHAM_HPP_EIGEN
@@ -1238,6 +1277,33 @@ public:
         const Eigen::MatrixBase<G> &gyr, const Eigen::MatrixBase<A> &acc, Eigen::VectorXd *spread = nullptr,
         Eigen::VectorXd *health = nullptr) {
         return update_batch(gyr, acc, Eigen::Matrix<double, 0, 3>(), spread, health);
+    }
+    /// n samples with their timestamps `t` (an Eigen vector of n seconds, row or column,
+    /// strictly increasing; bingham_ahrs_update_batch_timed(), see the std::vector overload):
+    /// gyr, acc, mag as above (mag with 0 rows for none), `spread` and `health` as above.
+    template <class T, class G, class A, class M>
+    Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> update_batch(
+        const Eigen::MatrixBase<T> &t, const Eigen::MatrixBase<G> &gyr, const Eigen::MatrixBase<A> &acc,
+        const Eigen::MatrixBase<M> &mag, Eigen::VectorXd *spread = nullptr, Eigen::VectorXd *health = nullptr) {
+        require("bingham::Ahrs::update_batch");
+        const Eigen::Index n = gyr.rows();
+        detail::require_dim((t.rows() == 1 || t.cols() == 1 || t.size() == 0) && t.size() == n && gyr.cols() == 3 &&
+                                acc.cols() == 3 && acc.rows() == n &&
+                                (mag.rows() == 0 || (mag.rows() == n && mag.cols() == 3)),
+                            "bingham::Ahrs::update_batch", "t has n entries; gyr, acc (and mag) must all be n x 3");
+        using Rows3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+        const Rows3 g = gyr, a = acc, m = mag;
+        Eigen::VectorXd tv(n);
+        for (Eigen::Index k = 0; k < n; ++k) tv(k) = t.cols() == 1 ? t(k, 0) : t(0, k);
+        Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> q(n, 4);
+        if (spread) spread->resize(n);
+        if (health) health->resize(n);
+        if (n == 0) return q;
+        const double *mp = mag.rows() == 0 ? nullptr : m.data();
+        detail::check(bingham_ahrs_update_batch_timed(a_, static_cast<std::size_t>(n), tv.data(), g.data(), a.data(),
+                                                      mp, q.data(), spread ? spread->data() : nullptr,
+                                                      health ? health->data() : nullptr));
+        return q;
     }
 #endif
     /// The orientation estimate (sensor -> world ENU, w >= 0); an Eigen::Quaterniond where Eigen
@@ -1278,7 +1344,8 @@ public:
     /// the model, above BINGHAM_AHRS_HEALTH_THRESHOLD (10) an input mistake is likely (gyroscope
     /// in deg/s, wrong sample time); `mag_rejected` near 1: magnetometer disturbed or axes wrong;
     /// `mag_dip` (rad, positive below the horizon) of the wrong sign for the place: a flipped
-    /// accelerometer.
+    /// accelerometer; `gyr_missing_time`, `acc_missing_time`, `mag_missing_time`: seconds since
+    /// each sensor's last usable sample (0 right after one).
     bingham_ahrs_health_report health() const {
         require("bingham::Ahrs::health");
         bingham_ahrs_health_report h{};
@@ -1298,6 +1365,17 @@ public:
         require("bingham::Ahrs::gyro_bias_covariance");
         std::array<double, 9> c{};
         detail::check(bingham_ahrs_gyro_bias_covariance(a_, c.data()));
+        return c;
+    }
+    /// The covariance of the orientation error (rad^2): 3 x 3 ROW-MAJOR, the error as a rotation
+    /// vector phi in the WORLD frame (ENU: x east, y north, z up), q_true = exp(phi/2) * q_est
+    /// with q_est = quaternion(); what sensor_msgs/Imu.orientation_covariance holds (row-major
+    /// there too). Symmetric positive semi-definite, its trace uncertainty()^2; the identity
+    /// before the first sample.
+    std::array<double, 9> orientation_covariance() const {
+        require("bingham::Ahrs::orientation_covariance");
+        std::array<double, 9> c{};
+        detail::check(bingham_ahrs_orientation_covariance(a_, c.data()));
         return c;
     }
     /// The online estimate of the magnetometer's latency behind the gyroscope (s), or nullopt
@@ -1326,6 +1404,17 @@ public:
         update(impl::to_array3(gyr, "bingham::Ahrs::update"), impl::to_array3(acc, "bingham::Ahrs::update"),
                impl::to_array3(mag, "bingham::Ahrs::update"));
     }
+    /// update_dt() with Eigen 3-vectors.
+    template <class DG, class DA>
+    void update_dt(double dt, const Eigen::MatrixBase<DG> &gyr, const Eigen::MatrixBase<DA> &acc) {
+        update_dt(dt, impl::to_array3(gyr, "bingham::Ahrs::update_dt"), impl::to_array3(acc, "bingham::Ahrs::update_dt"));
+    }
+    template <class DG, class DA, class DM>
+    void update_dt(double dt, const Eigen::MatrixBase<DG> &gyr, const Eigen::MatrixBase<DA> &acc,
+                   const Eigen::MatrixBase<DM> &mag) {
+        update_dt(dt, impl::to_array3(gyr, "bingham::Ahrs::update_dt"), impl::to_array3(acc, "bingham::Ahrs::update_dt"),
+                  impl::to_array3(mag, "bingham::Ahrs::update_dt"));
+    }
     /// The gyroscope bias as an Eigen vector.
     Eigen::Vector3d gyro_bias_vector() const {
         const auto b = gyro_bias();
@@ -1334,6 +1423,15 @@ public:
     /// The covariance of the gyroscope bias estimate as an Eigen matrix ((rad/s)^2).
     Eigen::Matrix3d gyro_bias_covariance_matrix() const {
         const auto c = gyro_bias_covariance();
+        Eigen::Matrix3d m;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) m(i, j) = c[static_cast<std::size_t>(3 * i + j)];
+        return m;
+    }
+    /// The orientation covariance (orientation_covariance()) as an Eigen matrix (rad^2, world
+    /// frame): entry (i, j) is the row-major array's [3 i + j].
+    Eigen::Matrix3d orientation_covariance_matrix() const {
+        const auto c = orientation_covariance();
         Eigen::Matrix3d m;
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) m(i, j) = c[static_cast<std::size_t>(3 * i + j)];

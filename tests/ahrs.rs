@@ -469,10 +469,10 @@ fn free_fall_is_skipped() {
 fn refused_samples_change_nothing() {
     let s = simulate(&Config::standard(5));
     let mut a = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
-    // Before initialization, too.
+    // Before initialization, too: a rate that turns more than MAX_TURN in a sample.
     let fresh = snapshot(&a);
     assert!(is_invalid_argument(&a.update(
-        &[f64::NAN, 0.0, 0.0],
+        &[1e9, 0.0, 0.0],
         &s.acc[0],
         None
     )));
@@ -483,7 +483,7 @@ fn refused_samples_change_nothing() {
     let reference = a.clone();
     let before = snapshot(&a);
     let (g, ac, m) = (s.gyr[1500], s.acc[1500], s.mag[1500]);
-    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+    for bad in [1e9, -1e9, 1e12] {
         for i in 0..3 {
             let mut gb = g;
             gb[i] = bad;
@@ -491,6 +491,14 @@ fn refused_samples_change_nothing() {
             assert!(is_invalid_argument(&a.update(&gb, &ac, None)));
             assert_eq!(snapshot(&a), before, "a refused sample changed the AHRS");
         }
+    }
+    // A time step that is not one: refused, nothing changed.
+    for dt in [0.0, -0.01, 1e-9, 10.5, f64::NAN, f64::INFINITY] {
+        assert!(
+            is_invalid_argument(&a.update_dt(dt, &g, &ac, Some(&m))),
+            "{dt}"
+        );
+        assert_eq!(snapshot(&a), before, "a refused time step changed the AHRS");
     }
     // Hidden state (filters, rest timer, magnetic reference) unchanged too: the refused
     // samples leave no trace in what follows.
@@ -595,7 +603,8 @@ fn batch_stops_at_the_first_refused_sample() {
     let bad_at = 120;
     let acc = s.acc.clone();
     let mut gyr = s.gyr.clone();
-    gyr[bad_at][1] = f64::NAN;
+    // a rate turning more than MAX_TURN in a sample (a NaN row is a gap, not an error)
+    gyr[bad_at][1] = 1e9;
     let mut a = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
     let mut quat = vec![[7.0; 4]; n];
     let mut spread = vec![7.0; n];

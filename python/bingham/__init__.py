@@ -24,7 +24,7 @@ Conventions (the same as in C and Rust):
 Which library is loaded (:func:`library_path` tells): the file named by the environment variable
 ``BINGHAM_LIB`` if set (for developers: a freshly built ``target/release/libbingham.so``), else the
 one bundled in the package, else ``target/release`` or ``target/debug`` of the checkout when the
-package is used from the source tree, else the system's (``libbingham.so.0`` of ``make install``).
+package is used from the source tree, else the system's (``libbingham.so.0.<minor>`` of ``make install``, found through its SONAME).
 
 Thread safety: the library is thread-safe; the error message read by :class:`BinghamError` is
 per thread, so exceptions carry the message of their own call.

@@ -110,9 +110,11 @@ _SIGNATURES = {
     "bingham_ahrs_free": (None, [ctypes.c_void_p]),
     "bingham_ahrs_clone": (_STATUS, [ctypes.c_void_p, ctypes.POINTER(ctypes.c_void_p)]),
     "bingham_ahrs_update": (_STATUS, [ctypes.c_void_p, _D, _D, _D]),
+    "bingham_ahrs_update_dt": (_STATUS, [ctypes.c_void_p, ctypes.c_double, _D, _D, _D]),
     "bingham_ahrs_update_batch": (_STATUS, [ctypes.c_void_p, _SIZE, _D, _D, _D, _D]),
     "bingham_ahrs_update_batch_spread": (_STATUS, [ctypes.c_void_p, _SIZE, _D, _D, _D, _D, _D]),
     "bingham_ahrs_update_batch_health": (_STATUS, [ctypes.c_void_p, _SIZE, _D, _D, _D, _D, _D, _D]),
+    "bingham_ahrs_update_batch_timed": (_STATUS, [ctypes.c_void_p, _SIZE, _D, _D, _D, _D, _D, _D, _D]),
     "bingham_ahrs_health": (_STATUS, [ctypes.c_void_p, ctypes.c_void_p]),
     "bingham_ahrs_quaternion": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_state": (_STATUS, [ctypes.c_void_p, _D, _D]),
@@ -120,6 +122,7 @@ _SIGNATURES = {
     "bingham_ahrs_angular_spread": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_gyro_bias": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_gyro_bias_covariance": (_STATUS, [ctypes.c_void_p, _D]),
+    "bingham_ahrs_orientation_covariance": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_mag_latency_estimate": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_spin_filter_new": (_STATUS, [_D, _D, _D, _D, ctypes.POINTER(ctypes.c_void_p)]),
     "bingham_spin_filter_free": (None, [ctypes.c_void_p]),
@@ -157,7 +160,11 @@ def _candidates() -> Iterator[str]:
     found = ctypes.util.find_library("bingham")
     if found:
         yield found
-    yield "libbingham.so.0"
+    # the installed library's SONAME (`make install`): libbingham.so.<major>, before 1.0
+    # libbingham.so.0.<minor> (each 0.x minor version may change the ABI)
+    parts = _package_version().split(".")
+    if len(parts) >= 2 and parts[0].isdigit() and parts[1].isdigit():
+        yield f"libbingham.so.0.{parts[1]}" if parts[0] == "0" else f"libbingham.so.{parts[0]}"
 
 
 def _load() -> Tuple[ctypes.CDLL, str]:

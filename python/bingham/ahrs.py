@@ -38,8 +38,11 @@ class AhrsHealth(ctypes.Structure):
     magnetometer samples refused as disturbed over the last :data:`HEALTH_TIME` seconds;
     ``mag_dip`` (rad, positive below the horizon) the reference field's dip, valid when
     ``has_mag_reference`` is 1 — of the wrong sign for the place (negative north of the
-    magnetic equator), the accelerometer's sign is flipped. All zero before the first
-    correction. Definitions: docs/guide.md, "Health readout"."""
+    magnetic equator), the accelerometer's sign is flipped; ``gyr_missing_time``,
+    ``acc_missing_time``, ``mag_missing_time`` the seconds since each sensor's last usable
+    sample (0 when the last sample had one; the magnetometer's counted from the first sample
+    if it was never seen). All zero before the first correction. Definitions: docs/guide.md,
+    "Health readout"."""
 
     _fields_ = [
         ("score", ctypes.c_double),
@@ -51,6 +54,9 @@ class AhrsHealth(ctypes.Structure):
         ("mag_rejected", ctypes.c_double),
         ("mag_dip", ctypes.c_double),
         ("has_mag_reference", ctypes.c_int32),
+        ("gyr_missing_time", ctypes.c_double),
+        ("acc_missing_time", ctypes.c_double),
+        ("mag_missing_time", ctypes.c_double),
     ]
 
     def __repr__(self) -> str:
@@ -256,15 +262,20 @@ class Ahrs(_Handle):
         p = AhrsParams.from_rate(hz)
         return cls(p.sample_time, p, **overrides)
 
-    def update(self, gyr: ArrayLike, acc: ArrayLike, mag: Optional[ArrayLike] = None) -> None:
-        """One sample (3-vectors; ``mag`` may be None). Per channel: NaN (or ±Inf) in ``acc``
-        or ``mag`` means "no sample" of that sensor at this time (not an error); NaN/Inf in
-        ``gyr`` refuses the sample (:class:`BinghamError`, the AHRS unchanged), and so does a
-        first sample without a finite accelerometer showing gravity."""
+    def update(self, gyr: ArrayLike, acc: ArrayLike, mag: Optional[ArrayLike] = None, dt: Optional[float] = None) -> None:
+        """One sample (3-vectors; ``mag`` may be None), taken ``dt`` seconds after the previous
+        one (default: the nominal ``sample_time``; ``bingham_ahrs_update_dt``). Per channel:
+        NaN (or ±Inf) means "no sample" of that sensor at this time (not an error); a missing
+        gyroscope sample is a gap the AHRS carries the orientation through, its uncertainty
+        added to the spread. Refused (:class:`BinghamError`, the AHRS unchanged): ``dt`` not in
+        1e-6 … 10 s, a first sample without a finite accelerometer showing gravity."""
         g = _in(gyr, "gyr", (3,))
         a = _in(acc, "acc", (3,))
         m = None if mag is None else _in(mag, "mag", (3,))
-        _check(lib().bingham_ahrs_update(self._h(), _ptr(g), _ptr(a), _ptr(m)))
+        if dt is None:
+            _check(lib().bingham_ahrs_update(self._h(), _ptr(g), _ptr(a), _ptr(m)))
+        else:
+            _check(lib().bingham_ahrs_update_dt(self._h(), float(dt), _ptr(g), _ptr(a), _ptr(m)))
 
     def update_batch(
         self,
@@ -273,15 +284,19 @@ class Ahrs(_Handle):
         mag: Optional[ArrayLike] = None,
         spread: bool = False,
         health: bool = False,
+        time: Optional[ArrayLike] = None,
     ) -> Union[Array, Tuple[Array, ...]]:
         """n samples (n×3 arrays; ``mag`` n×3 or None). Returns the n×4 quaternions after each
         sample, or a tuple ``(quat, spread)``, ``(quat, health)`` or ``(quat, spread, health)``
         with the total angular spread (radians, length n) when ``spread`` is true and the health
-        score (:meth:`health`'s ``score``, length n) when ``health`` is true. Per channel, as in :meth:`update`: a row of ``acc`` or ``mag``
-        holding NaN means "no sample" of that sensor at that time (fill the rows of a slower or
-        gappy sensor with NaN); every row of ``gyr`` must be finite. A refused sample raises
-        :class:`BinghamError` (its message names the sample, "sample k: ..."); the samples
-        before it have been processed."""
+        score (:meth:`health`'s ``score``, length n) when ``health`` is true. ``time``: the n
+        timestamps (s, strictly increasing; ``bingham_ahrs_update_batch_timed``), so that each
+        sample has its own time step (dropped packets, jitter); the first one's step is from
+        the previous timed batch's last timestamp, or the nominal period. Per channel, as in
+        :meth:`update`: a row holding NaN means "no sample" of that sensor at that time (fill
+        the rows of a slower or gappy sensor with NaN; a NaN gyroscope row is a gap, never an
+        error). A refused sample raises :class:`BinghamError` (its message names the sample,
+        "sample k: ..."); the samples before it have been processed."""
         g = _rows3(gyr, "gyr")
         n = g.shape[0]
         a = _rows3(acc, "acc", n)
@@ -289,11 +304,19 @@ class Ahrs(_Handle):
         q = np.empty((n, 4))
         s = np.empty(n) if spread else None
         h = np.empty(n) if health else None
-        _check(
-            lib().bingham_ahrs_update_batch_health(
-                self._h(), n, _ptr(g), _ptr(a), _ptr(m), _ptr(q), _ptr(s), _ptr(h)
+        if time is None:
+            _check(
+                lib().bingham_ahrs_update_batch_health(
+                    self._h(), n, _ptr(g), _ptr(a), _ptr(m), _ptr(q), _ptr(s), _ptr(h)
+                )
             )
-        )
+        else:
+            t = _in(time, "time", (n,))
+            _check(
+                lib().bingham_ahrs_update_batch_timed(
+                    self._h(), n, _ptr(t), _ptr(g), _ptr(a), _ptr(m), _ptr(q), _ptr(s), _ptr(h)
+                )
+            )
         extra = tuple(x for x in (s, h) if x is not None)
         return (q, *extra) if extra else q
 
@@ -342,6 +365,15 @@ class Ahrs(_Handle):
         as motion and rests teach the bias."""
         out = np.empty((3, 3))
         _check(lib().bingham_ahrs_gyro_bias_covariance(self._h(), _ptr(out)))
+        return out
+
+    def orientation_covariance(self) -> Array:
+        """The 3×3 covariance (rad²) of the orientation error as a rotation vector in the world
+        frame (ENU, REP 103): ``q_true = exp(φ/2) ⊗ q̂``, what ``sensor_msgs/Imu``'s
+        ``orientation_covariance`` holds (row-major there). Its trace is the square of the
+        total :meth:`angular_spread`."""
+        out = np.empty((3, 3))
+        _check(lib().bingham_ahrs_orientation_covariance(self._h(), _ptr(out)))
         return out
 
     def mag_latency_estimate(self) -> Optional[float]:

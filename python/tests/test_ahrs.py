@@ -115,18 +115,20 @@ def test_ahrs_tracks_a_simulated_rotation():
     assert np.all(np.isfinite(spread)) and np.all(spread > 0)
 
 
-def test_ahrs_refuses_nan_sample_and_batch_names_it():
+def test_ahrs_refuses_a_gyroscope_turning_too_far_and_batch_names_it():
     a = bh.Ahrs(0.01)
     a.update([0, 0, 0], [0, 0, 9.81], [0, 20, -40])
     q0, s0, b0 = a.quaternion(), a.state(), a.gyro_bias()
+    # finite, but 1e12 rad/s turns by 1e10 rad in 0.01 s: not a rate
     with pytest.raises(bh.BinghamError) as e:
-        a.update([np.nan, 0, 0], [0, 0, 9.81], None)
-    assert e.value.status == bh.Status.ERR_INVALID_ARGUMENT
+        a.update([1e12, 0, 0], [0, 0, 9.81], None)
+    assert e.value.status == bh.Status.ERR_INVALID_ARGUMENT and "gyroscope" in e.value.message
     assert np.array_equal(q0, a.quaternion()) and np.array_equal(b0, a.gyro_bias())
     assert np.array_equal(s0[0], a.state()[0])
     gyr = np.zeros((10, 3))
     acc = np.tile([0, 0, 9.81], (10, 1))
-    gyr[6, 2] = np.inf  # (NaN/Inf in acc or mag means "no sample": test_ahrs_channels.py)
+    gyr[3, 1] = np.inf  # a gyroscope gap: processed (NaN/Inf is "no sample": test_ahrs_channels.py)
+    gyr[6, 2] = -1e12
     with pytest.raises(bh.BinghamError) as e:
         a.update_batch(gyr, acc)
     assert "sample 6" in e.value.message

@@ -204,8 +204,11 @@ def test_every_called_c_function_has_a_python_name():
         (lambda: bh.Filter(np.eye(4), [-1.0, -1.0, -1.0, 0.0]).update_nonlinear(lambda x: math.nan),
          "Filter.update_nonlinear"),
         (lambda: bh.Ahrs(DT, acc_noise=-1.0), "Ahrs"),
-        (lambda: bh.Ahrs(DT).update([np.nan, 0.0, 0.0], [0.0, 0.0, 9.81]), "Ahrs.update"),
+        (lambda: bh.Ahrs(DT).update([1e12, 0.0, 0.0], [0.0, 0.0, 9.81]), "Ahrs.update"),
+        (lambda: bh.Ahrs(DT).update([0.0, 0.0, 0.0], [0.0, 0.0, 9.81], dt=-1.0), "Ahrs.update"),
         (lambda: bh.Ahrs(DT).update_batch(np.full((2, 3), np.nan), np.zeros((2, 3))), "Ahrs.update_batch"),
+        (lambda: bh.Ahrs(DT).update_batch(np.zeros((2, 3)), np.tile([0.0, 0.0, 9.81], (2, 1)), time=[1.0, 1.0]),
+         "Ahrs.update_batch"),
         (lambda: bh.AhrsParams.default(-1.0), "AhrsParams.default"),
     ],
 )

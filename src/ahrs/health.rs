@@ -42,6 +42,7 @@ use std::f64::consts::PI;
 use nalgebra::{Matrix3, Vector3};
 
 use super::bias::pinv;
+use super::timing::SensorTimes;
 
 /// The time constant (s) of the health averages (`BINGHAM_AHRS_HEALTH_TIME` in C): long enough that one burst of linear
 /// acceleration (a fraction of a second) or a short magnetic disturbance does not raise the
@@ -90,6 +91,17 @@ pub struct AhrsHealth {
     pub mag_dip: f64,
     /// 1 when a magnetic reference exists (a field has been seen), else 0.
     pub has_mag_reference: i32,
+    /// Seconds since the last gyroscope sample (0 when the last sample had one; a NaN row is
+    /// a missing sample): the AHRS carries the last rate through a gap and widens the spread.
+    pub gyr_missing_time: f64,
+    /// Seconds since the last usable accelerometer sample (0 when the last sample had one; a
+    /// NaN row or free fall is none): without it there is no tilt evidence.
+    pub acc_missing_time: f64,
+    /// Seconds since the last magnetometer sample (0 when the last sample had one; NULL, a NaN
+    /// row or a zero field is none; counted from the first sample for a magnetometer never
+    /// seen): without it there is no heading evidence. A field the disturbance test refuses
+    /// is a sample (see `mag_rejected`).
+    pub mag_missing_time: f64,
 }
 
 /// An exponential average with its start-up bias removed (the mean of the values seen so far,
@@ -137,7 +149,8 @@ impl HealthState {
     /// One correction of period `t` (s) with the prior's body-frame precision `lam` (rad⁻²),
     /// the predicted body-frame up `b_hat` (unit), the observed one `b` (unit) with its
     /// angular variance `var_a` (rad², or `None` without a tilt observation), and the heading
-    /// error `delta` (rad) with its variance `var_m` (or `None`).
+    /// error `delta` (rad) with its variance `var_m` (or `None`). Returns the correction's
+    /// largest normalized innovation per degree of freedom (0 without an observation).
     pub(super) fn correction(
         &mut self,
         t: f64,
@@ -146,14 +159,15 @@ impl HealthState {
         tilt: Option<(&[f64; 3], f64)>,
         heading: Option<(f64, f64)>,
         gravity_excess: Option<f64>,
-    ) {
+    ) -> f64 {
         let alpha = (t / HEALTH_TIME).min(1.0);
         if let Some(x) = gravity_excess {
             self.gravity.push(x * x, alpha);
         }
         if tilt.is_none() && heading.is_none() {
-            return;
+            return 0.0;
         }
+        let mut largest = 0.0f64;
         // The state's covariance (rad², body frame; see `covariance`).
         let sigma = covariance(lam);
         let bh = Vector3::from(*b_hat);
@@ -170,18 +184,21 @@ impl HealthState {
             };
             let nis = tilt_nis(&sigma, &bh, &e, var_a);
             self.tilt.push(nis / 2.0, alpha);
+            largest = largest.max(nis / 2.0);
             self.tilt_innovation = angle;
         }
         if let Some((delta, var_m)) = heading {
             let var = (bh.transpose() * sigma * bh)[0].max(0.0) + var_m;
             self.heading.push(delta * delta / var, alpha);
             self.heading_innovation = delta;
+            largest = largest.max(delta * delta / var);
         }
+        largest
     }
 
     /// The readout, with the reference dip `dip_above` (rad above the horizon, as the
     /// magnetometer's state keeps it) if there is a reference.
-    pub(super) fn readout(&self, dip_above: Option<f64>) -> AhrsHealth {
+    pub(super) fn readout(&self, dip_above: Option<f64>, times: &SensorTimes) -> AhrsHealth {
         let (gravity, tilt, heading) = (
             self.gravity.value(),
             self.tilt.value(),
@@ -197,6 +214,9 @@ impl HealthState {
             mag_rejected: self.rejected.value(),
             mag_dip: dip_above.map_or(0.0, |d| -d),
             has_mag_reference: i32::from(dip_above.is_some()),
+            gyr_missing_time: times.gyr_missing,
+            acc_missing_time: times.acc_missing,
+            mag_missing_time: times.mag_missing,
         }
     }
 }
@@ -264,7 +284,7 @@ mod tests {
         let lam = Matrix3::from_diagonal(&Vector3::new(1e4, 1e4, 0.0));
         let mut h = HealthState::default();
         h.correction(0.02, &lam, &[0.0, 0.0, 1.0], None, Some((3.0, 1e-4)), None);
-        let r = h.readout(None);
+        let r = h.readout(None, &SensorTimes::default());
         assert!(r.heading_score < 3.0, "{}", r.heading_score);
         assert!(r.heading_score > 2.0, "{}", r.heading_score);
     }
@@ -278,7 +298,7 @@ mod tests {
         let mut h = HealthState::default();
         let b = [sd.sin(), 0.0, sd.cos()];
         h.correction(0.02, &lam, &[0.0, 0.0, 1.0], Some((&b, 0.0)), None, None);
-        let r = h.readout(None);
+        let r = h.readout(None, &SensorTimes::default());
         // the variance is 1/(1/σ² + 3/π²): ν = σ²·(1/σ² + 3/π²)
         let reg = 3.0 / (PI * PI);
         let want = 0.5 * (1.0 + reg * sd * sd);
@@ -293,7 +313,7 @@ mod tests {
             Some((2.0 * sd, sd * sd)),
             Some(0.5),
         );
-        let r = h.readout(Some(-1.0));
+        let r = h.readout(Some(-1.0), &SensorTimes::default());
         let var = 1.0 / (1.0 / (sd * sd) + reg) + sd * sd;
         assert!(
             (r.heading_score - 4.0 * sd * sd / var).abs() < 1e-9,

@@ -82,6 +82,26 @@ impl Coeffs {
     }
 }
 
+impl Coeffs {
+    /// The coefficients for one step of `h` seconds: the first-order filters' coefficients for
+    /// `h`, the rest (the second-order filters, which take a long step as `round(h/dt)` nominal
+    /// samples; the latency leads; the correction period) as for the nominal period. The
+    /// nominal coefficients themselves when `h` is the nominal period.
+    pub(super) fn at_step(&self, p: &AhrsParams, h: f64) -> Coeffs {
+        if h == p.sample_time {
+            return *self;
+        }
+        Coeffs {
+            rest_filter: lp_coeff(h, REST_FILTER_TIME),
+            rest_noise: lp_coeff(h, REST_NOISE_TIME),
+            mag_ref: lp_coeff(h, p.mag_ref_time),
+            candidate: lp_coeff(h, CANDIDATE_TIME),
+            mag_test: lp_coeff(h, MAG_TEST_TIME),
+            ..*self
+        }
+    }
+}
+
 fn correct_every(dt: f64) -> u32 {
     (CORRECTION_PERIOD / dt)
         .round()

@@ -91,14 +91,25 @@ impl Magnetic {
         self.clean_time = 0.0;
     }
 
+    /// Drops the world-frame average (the next used sample starts a new one): after a loss of
+    /// the magnetometer longer than `mag_tau`, the old average was turned by the gyroscope
+    /// alone since its last sample.
+    pub(super) fn restart_average(&mut self) {
+        self.lp = None;
+    }
+
     /// One field sample `m` (sensor frame, latency-compensated) with the current estimate `q`
-    /// and the rotation rate `rate` (rad/s): the disturbance test, the reference and the
+    /// and the rotation rate `rate` (rad/s), `h` seconds after the previous sample, which the
+    /// average takes as `repeat` nominal samples: the disturbance test, the reference and the
     /// average. Returns whether the sample was used (undisturbed phase).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn observe(
         &mut self,
         q: &[f64; 4],
         m: &[f64; 3],
         rate: f64,
+        h: f64,
+        repeat: u32,
         p: &AhrsParams,
         c: &Coeffs,
     ) -> bool {
@@ -114,7 +125,7 @@ impl Magnetic {
             None => (raw_norm, raw_dip),
         };
         self.tested = Some((norm, dip));
-        let dt = p.sample_time;
+        let dt = h;
         let (rn, rd) = *self.reference.get_or_insert((norm, dip));
         let passes = (norm - rn).abs() <= p.mag_norm_tol * rn && (dip - rd).abs() <= p.mag_dip_tol;
         if !passes {
@@ -124,7 +135,7 @@ impl Magnetic {
             }
             self.disturbed = true;
             self.clean_time = 0.0;
-            self.follow_candidate(norm, dip, rate, p, c);
+            self.follow_candidate(norm, dip, rate, h, p, c);
             return false;
         }
         self.cand_time = 0.0;
@@ -139,7 +150,7 @@ impl Magnetic {
         self.reference = Some((rn + k * (norm - rn), rd + k * (dip - rd)));
         let mw = q4::rotate(q, m);
         match self.lp.as_mut() {
-            Some(lp) => lp.step(&mw),
+            Some(lp) => (0..repeat).for_each(|_| lp.step(&mw)),
             None => self.lp = Some(InertialLowPass::new(c.mag, c.mag_warmup, &mw)),
         }
         true
@@ -147,7 +158,15 @@ impl Magnetic {
 
     /// A disturbed sample: the candidate follows a steady field and becomes the reference
     /// after `mag_new_time` seconds of rotation.
-    fn follow_candidate(&mut self, norm: f64, dip: f64, rate: f64, p: &AhrsParams, c: &Coeffs) {
+    fn follow_candidate(
+        &mut self,
+        norm: f64,
+        dip: f64,
+        rate: f64,
+        h: f64,
+        p: &AhrsParams,
+        c: &Coeffs,
+    ) {
         let (cn, cd) = self.cand;
         let steady = (norm - cn).abs() <= p.mag_norm_tol * cn && (dip - cd).abs() <= p.mag_dip_tol;
         if !steady {
@@ -158,7 +177,7 @@ impl Magnetic {
         let k = c.candidate;
         self.cand = (cn + k * (norm - cn), cd + k * (dip - cd));
         if rate >= NEW_REF_RATE {
-            self.cand_time += p.sample_time;
+            self.cand_time += h;
         }
         if self.cand_time >= p.mag_new_time {
             self.reference = Some(self.cand);
@@ -229,22 +248,22 @@ mod tests {
         let q = [1.0, 0.0, 0.0, 0.0];
         let mut m = Magnetic::new();
         m.start(&field(60.0, 0.0), &UP);
-        assert!(m.observe(&q, &field(60.0, 0.0), 0.0, &p, &c));
+        assert!(m.observe(&q, &field(60.0, 0.0), 0.0, p.sample_time, 1, &p, &c));
         // 0.2 s of a disturbed field (norm +30 %)
         let bad = field(60.0, 0.0).map(|v| v * 1.3);
         for _ in 0..20 {
-            m.observe(&q, &bad, 0.0, &p, &c);
+            m.observe(&q, &bad, 0.0, p.sample_time, 1, &p, &c);
         }
         assert!(!m.trusted());
         // then a clean field: not used for the first 0.5 s (the low-passed norm also needs a
         // few samples to come back within tolerance), used from 0.8 s on
         for _ in 0..50 {
-            assert!(!m.observe(&q, &field(60.0, 0.0), 0.0, &p, &c));
+            assert!(!m.observe(&q, &field(60.0, 0.0), 0.0, p.sample_time, 1, &p, &c));
         }
         for _ in 0..30 {
-            m.observe(&q, &field(60.0, 0.0), 0.0, &p, &c);
+            m.observe(&q, &field(60.0, 0.0), 0.0, p.sample_time, 1, &p, &c);
         }
-        assert!(m.observe(&q, &field(60.0, 0.0), 0.0, &p, &c));
+        assert!(m.observe(&q, &field(60.0, 0.0), 0.0, p.sample_time, 1, &p, &c));
         assert!(m.heading_error().is_some());
     }
 
@@ -260,13 +279,13 @@ mod tests {
         m.start(&field(60.0, 0.0), &UP);
         let new = field(40.0, 0.0).map(|v| v * 1.5);
         for _ in 0..300 {
-            assert!(!m.observe(&q, &new, 0.0, &p, &c));
+            assert!(!m.observe(&q, &new, 0.0, p.sample_time, 1, &p, &c));
         }
         for _ in 0..100 {
-            m.observe(&q, &new, 1.0, &p, &c);
+            m.observe(&q, &new, 1.0, p.sample_time, 1, &p, &c);
         }
         assert!(m.trusted());
-        assert!(m.observe(&q, &new, 1.0, &p, &c));
+        assert!(m.observe(&q, &new, 1.0, p.sample_time, 1, &p, &c));
     }
 
     #[test]
@@ -277,7 +296,7 @@ mod tests {
         let mut m = Magnetic::new();
         m.start(&field(60.0, 0.3), &UP);
         for _ in 0..10 {
-            m.observe(&q, &field(60.0, 0.3), 0.0, &p, &c);
+            m.observe(&q, &field(60.0, 0.3), 0.0, p.sample_time, 1, &p, &c);
         }
         let d = m.heading_error().unwrap();
         assert!((d - 0.3).abs() < 1e-9, "{d}");

@@ -71,6 +71,7 @@ mod lowpass;
 mod magnetic;
 mod params;
 mod rest;
+mod timing;
 mod vec3;
 
 use bias::{evidence_precision, noise_moment, pinv, precision, BiasState};
@@ -81,14 +82,30 @@ pub use lowpass::CORRECTION_PERIOD;
 use lowpass::{Coeffs, InertialLowPass};
 use magnetic::{heading_exponent, Magnetic};
 pub use params::{
-    AhrsParams, LATENCY_ESTIMATE, MAX_LATENCY, MAX_SAMPLE_TIME, MIN_SAMPLE_TIME, MIN_STEP_NOISE,
+    AhrsParams, LATENCY_ESTIMATE, MAX_LATENCY, MAX_SAMPLE_TIME, MAX_STEP_TIME, MIN_SAMPLE_TIME,
+    MIN_STEP_NOISE,
 };
 use rest::RestWindow;
+use timing::{GyroHold, SensorTimes};
 use vec3::{cross3, norm3, scale3};
 
 /// The largest rotation (rad) one gyroscope sample may turn (`|gyr|·sample_time`): a million
 /// radians, far beyond any sensor, below where the increment's arithmetic loses meaning.
 pub const MAX_TURN: f64 = 1e6;
+
+/// A correction whose innovation exceeds this many of its predicted standard deviations (the
+/// health readout's normalized innovation per degree of freedom above its square) teaches the
+/// bias nothing (module `bias`: the coupling models small errors).
+const OUTLIER: f64 = 5.0;
+
+/// The largest move of the mode (rad) at a correction that teaches the bias: the coupling's
+/// first-order model (module `bias`) errs by the square of the angle, 1 % at 0.1 rad. A
+/// correction moves the mode by 1e-4 to 1e-2 rad in tracking; larger moves are recoveries
+/// (a wrong start, after a gap), not bias.
+const LINEAR_MOVE: f64 = 0.1;
+
+/// The relative tolerance within which a sample's time step counts as the nominal period.
+const SNAP: f64 = 1e-6;
 
 /// The world's "up" (ENU).
 const UP: [f64; 3] = [0.0, 0.0, 1.0];
@@ -117,8 +134,18 @@ struct SampleState {
     rest_held: f64,
     acc_filter: InertialLowPass,
     mag: Magnetic,
-    /// Samples since the last correction.
-    since: u32,
+    /// The gyroscope's last rate and the motion's statistics, for gaps (module `timing`).
+    hold: GyroHold,
+    /// Each sensor's missing time and its coverage of the correction period.
+    times: SensorTimes,
+    /// The variance (rad² per axis) the current gyroscope gap has added by carrying the rate,
+    /// and whether a gap came in the current correction period (module `timing`).
+    gap_var: f64,
+    gap_in_period: bool,
+    /// The accelerometer's and the magnetometer's averages wait to be restarted by their next
+    /// sample: a gyroscope gap turned them with a carried rate by more than their own noise.
+    restart_acc: bool,
+    restart_mag: bool,
     /// `omega(z)` of the Bingham state (cached for the next composition and the spread).
     omega: [f64; 4],
     /// The running state of the health readout.
@@ -139,6 +166,8 @@ pub struct Ahrs {
     /// The online estimate of the magnetometer's latency (a readout; not used by the filter).
     latency: LatencyEstimator,
     samples: u64,
+    /// The timestamp (s) of the last sample of a timed batch ([`Ahrs::update_batch_timed`]).
+    last_time: Option<f64>,
 }
 
 impl Ahrs {
@@ -162,12 +191,18 @@ impl Ahrs {
                 rest_held: 0.0,
                 acc_filter: InertialLowPass::new(coeffs.acc, coeffs.acc_warmup, &[0.0; 3]),
                 mag: Magnetic::new(),
-                since: 0,
+                hold: GyroHold::default(),
+                times: SensorTimes::default(),
+                gap_var: 0.0,
+                gap_in_period: false,
+                restart_acc: false,
+                restart_mag: false,
                 omega: [0.25; 4],
                 health: HealthState::default(),
             },
             latency: LatencyEstimator::new(params.sample_time),
             samples: 0,
+            last_time: None,
         })
     }
 
@@ -267,7 +302,9 @@ impl Ahrs {
             return Ok(());
         };
         crate::observation::spread_from_omega(&self.sample_state.omega, out);
-        let n = &self.sample_state.bias.pending;
+        // the pending noise made positive semi-definite, as the next correction and the
+        // orientation covariance take it (the two readouts then agree: trace = spread²)
+        let n = &bias::psd(&self.sample_state.bias.pending);
         if n.trace() > 0.0 {
             let core = f.core4()?;
             let (m, _) = core.params();
@@ -287,13 +324,57 @@ impl Ahrs {
         Ok(())
     }
 
+    /// The covariance (rad², 3×3 row-major) of the orientation error as a rotation vector in
+    /// the world frame (ENU): `q_true = exp(φ/2) ⊗ q̂` (`φ` about the world's x east, y north,
+    /// z up; `q̂` [`Ahrs::quaternion`]), what `sensor_msgs/Imu.orientation_covariance` holds
+    /// for an orientation of the IMU in an ENU world (REP 103). From the state's second
+    /// moments (`4 Σ ω_i u_i u_iᵀ`, `u_i` the principal directions at the mode), plus the process
+    /// noise accumulated since the last correction: its trace is the square of the total
+    /// [`Ahrs::angular_spread`]. Before the first sample: that of a uniform orientation's
+    /// spread.
+    pub fn orientation_covariance(&self) -> Result<[f64; 9]> {
+        let mut body = Matrix3::zeros();
+        let q = match &self.filter {
+            None => {
+                // the uniform distribution: ω_i = 1/4
+                body = Matrix3::identity() * (4.0 * 0.25);
+                [1.0, 0.0, 0.0, 0.0]
+            }
+            Some(f) => {
+                let core = f.core4()?;
+                let (m, _) = core.params();
+                let q = core.mode();
+                let qc = q4::conj(&q);
+                for i in 0..3 {
+                    let c = m.column(i);
+                    let v = q4::mul(&qc, &[c[0], c[1], c[2], c[3]]);
+                    let u = Vector3::new(v[1], v[2], v[3]);
+                    body += u * u.transpose() * (4.0 * self.sample_state.omega[i].max(0.0));
+                }
+                body += bias::psd(&self.sample_state.bias.pending);
+                q
+            }
+        };
+        let r = q4::to_matrix(&q);
+        let r = Matrix3::from_fn(|i, j| r[i][j]);
+        let world = r * body * r.transpose();
+        let mut out = [0.0; 9];
+        for i in 0..3 {
+            for j in 0..3 {
+                out[3 * i + j] = 0.5 * (world[(i, j)] + world[(j, i)]);
+            }
+        }
+        Ok(out)
+    }
+
     /// The health readout (module `health`): how well the sensors agree with the model
     /// over the last [`HEALTH_TIME`] seconds; `score` above [`HEALTH_THRESHOLD`] flags an
     /// input mistake (units, period, axes). All zero before the first correction.
     pub fn health(&self) -> AhrsHealth {
-        self.sample_state
-            .health
-            .readout(self.sample_state.mag.reference_dip())
+        self.sample_state.health.readout(
+            self.sample_state.mag.reference_dip(),
+            &self.sample_state.times,
+        )
     }
 
     /// The gyroscope bias estimate (rad/s, sensor frame).
@@ -339,29 +420,73 @@ impl Ahrs {
             .ok_or_else(|| Error::NotConverged(self.latency.why_none()))
     }
 
-    /// Processes one sample: `gyr` (rad/s), `acc` (m/s²), `mag` (any unit, or `None`).
-    ///
-    /// Per channel: a non-finite (NaN/Inf) accelerometer or magnetometer sample means "no
-    /// sample" for that sensor — the gyroscope increment and the other sensor are still used.
-    /// Refused (error, nothing changed): a non-finite gyroscope sample
-    /// ([`Error::InvalidArgument`]); the first sample without a usable accelerometer
-    /// (non-finite or `|acc| < gravity/4`: no tilt to start from); a numerical failure of a
-    /// correction step ([`Error::Numerical`]). Skipped parts (not an error): the accelerometer
-    /// when `|acc| < gravity/4` (free fall), the magnetometer for a zero field, a field along
-    /// the vertical, or a disturbed field.
+    /// Processes one sample taken [`AhrsParams::sample_time`] after the previous one: `gyr`
+    /// (rad/s), `acc` (m/s²), `mag` (any unit, or `None`). [`Ahrs::update_dt`] with the nominal
+    /// period.
     pub fn update(&mut self, gyr: &[f64; 3], acc: &[f64; 3], mag: Option<&[f64; 3]>) -> Result<()> {
-        if let Some(i) = gyr.iter().position(|x| !x.is_finite()) {
+        self.update_dt(self.params.sample_time, gyr, acc, mag)
+    }
+
+    /// Processes one sample taken `dt` seconds after the previous one (its own time step:
+    /// jitter, dropped packets; module `timing`): `gyr` (rad/s), `acc` (m/s²), `mag` (any unit,
+    /// or `None`). `dt` of the first sample is not used; a `dt` within a millionth of
+    /// [`AhrsParams::sample_time`] is taken as it (so uniformly spaced timestamps give the
+    /// results of [`Ahrs::update`] bit for bit).
+    ///
+    /// Per channel, a non-finite (NaN/Inf) sample means "no sample" of that sensor: a missing
+    /// gyroscope sample is a gap, turned with the last rate held and its uncertainty added to
+    /// the spread; a missing accelerometer or magnetometer sample gives no evidence. Refused
+    /// (error, nothing changed): `dt` not finite or outside [`MIN_SAMPLE_TIME`] …
+    /// [`MAX_STEP_TIME`]; a gyroscope sample turning more than [`MAX_TURN`] rad in `dt`; the
+    /// first sample without a usable accelerometer (non-finite or `|acc| < gravity/4`: no tilt
+    /// to start from); a numerical failure of a correction step ([`Error::Numerical`]).
+    /// Skipped parts (not an error): the accelerometer when `|acc| < gravity/4` (free fall),
+    /// the magnetometer for a zero field, a field along the vertical, or a disturbed field.
+    pub fn update_dt(
+        &mut self,
+        dt: f64,
+        gyr: &[f64; 3],
+        acc: &[f64; 3],
+        mag: Option<&[f64; 3]>,
+    ) -> Result<()> {
+        self.step_dt(dt, gyr, acc, mag)?;
+        self.last_time = None;
+        Ok(())
+    }
+
+    /// [`Ahrs::update_dt`] without forgetting a timed batch's last timestamp.
+    fn step_dt(
+        &mut self,
+        dt: f64,
+        gyr: &[f64; 3],
+        acc: &[f64; 3],
+        mag: Option<&[f64; 3]>,
+    ) -> Result<()> {
+        // A step within a millionth of the nominal period is the nominal period: differences
+        // of uniformly spaced timestamps carry rounding, which should not make every sample
+        // take the path of an irregular one (nor be refused at the smallest period).
+        let nominal = self.params.sample_time;
+        let dt = if (dt - nominal).abs() <= SNAP * nominal {
+            nominal
+        } else {
+            dt
+        };
+        if !(MIN_SAMPLE_TIME..=MAX_STEP_TIME).contains(&dt) {
             return Err(Error::InvalidArgument(format!(
-                "`gyr[{i}]` = {} is not finite (the gyroscope is required in every sample)",
-                gyr[i]
+                "the time step dt = {dt} s is not finite or outside {MIN_SAMPLE_TIME:e} to \
+                 {MAX_STEP_TIME} s (seconds, not milliseconds)"
             )));
         }
-        let turn = norm3(gyr) * self.params.sample_time;
-        if turn.is_nan() || turn > MAX_TURN {
-            return Err(Error::InvalidArgument(format!(
-                "the gyroscope sample turns by |gyr|·sample_time = {turn:e} rad, more than \
-                 {MAX_TURN:e} rad in one sample: not a rotation rate"
-            )));
+        // a finite rate whose norm overflows is no gap: it turns far more than MAX_TURN
+        let gyr = gyr.iter().all(|x| x.is_finite()).then_some(gyr);
+        if let Some(g) = gyr {
+            let turn = norm3(g) * dt;
+            if !turn.is_finite() || turn > MAX_TURN {
+                return Err(Error::InvalidArgument(format!(
+                    "the gyroscope sample turns by |gyr|·dt = {turn:e} rad, more than \
+                     {MAX_TURN:e} rad in one sample: not a rotation rate"
+                )));
+            }
         }
         let acc = usable3(acc).then_some(acc);
         let mag = mag.filter(|m| usable3(m) && norm3(m) > 0.0);
@@ -379,11 +504,16 @@ impl Ahrs {
         if self.params.mag_latency == LATENCY_ESTIMATE {
             c.mag_lead = self.latency.estimate().unwrap_or(0.0) / self.params.sample_time;
         }
-        match step(&self.params, &c, core, &mut s, gyr, acc, mag) {
+        match step(&self.params, &c, core, &mut s, dt, gyr, acc, mag) {
             Ok((dq, mag_used)) => {
                 self.sample_state = s;
-                // the latency estimate works on the raw samples (infallible, after the rest)
-                self.latency.push(&dq, if mag_used { mag } else { None });
+                // the latency estimate works on the raw samples at the nominal period
+                // (infallible, after the rest); a sample off the period is not one of them
+                if gyr.is_some()
+                    && (dt - self.params.sample_time).abs() <= 0.5 * self.params.sample_time
+                {
+                    self.latency.push(&dq, if mag_used { mag } else { None });
+                }
                 self.samples += 1;
                 Ok(())
             }
@@ -397,7 +527,7 @@ impl Ahrs {
     /// The first sample: tilt from `acc`, heading from `mag` (uniform without it).
     fn initialize(
         &mut self,
-        gyr: &[f64; 3],
+        gyr: Option<&[f64; 3]>,
         acc: Option<&[f64; 3]>,
         mag: Option<&[f64; 3]>,
     ) -> Result<()> {
@@ -410,6 +540,8 @@ impl Ahrs {
                     .into(),
             ));
         };
+        // without a gyroscope sample the rate is taken as zero (the sensor at rest)
+        let gyr = gyr.unwrap_or(&[0.0; 3]);
         // the latency compensation of `update`, with the rate of this sample
         let b = self.gyro_bias();
         let w = scale3(
@@ -456,7 +588,7 @@ impl Ahrs {
                         core.update_precision(&heading_exponent(&q0, kappa))?;
                     }
                     mag_state.start(m, &up_b);
-                    mag_state.observe(&core.mode(), m, 0.0, &p, &c);
+                    mag_state.observe(&core.mode(), m, 0.0, p.sample_time, 1, &p, &c);
                 }
             }
         }
@@ -471,7 +603,12 @@ impl Ahrs {
         self.sample_state.rest_held = 0.0;
         self.sample_state.acc_filter = InertialLowPass::new(c.acc, c.acc_warmup, &acc);
         self.sample_state.mag = mag_state;
-        self.sample_state.since = 0;
+        self.sample_state.hold = GyroHold::default();
+        self.sample_state.times = SensorTimes::default();
+        self.sample_state.gap_var = 0.0;
+        self.sample_state.gap_in_period = false;
+        self.sample_state.restart_acc = false;
+        self.sample_state.restart_mag = false;
         self.sample_state.omega = [omega[0], omega[1], omega[2], omega[3]];
         self.sample_state.bias.pending = Matrix3::zeros();
         self.samples = 1;
@@ -503,12 +640,50 @@ impl Ahrs {
         acc: &[[f64; 3]],
         mag: Option<&[[f64; 3]]>,
         quat: &mut [[f64; 4]],
+        spread: Option<&mut [f64]>,
+        health: Option<&mut [f64]>,
+    ) -> Result<()> {
+        self.batch(None, gyr, acc, mag, quat, spread, health)
+    }
+
+    /// [`Ahrs::update_batch_health`] with a timestamp per sample: `time[k]` (s, strictly
+    /// increasing, any origin) is when sample `k` was taken, and each sample is processed with
+    /// its own time step ([`Ahrs::update_dt`]): `time[k] − time[k−1]`, for the first sample
+    /// `time[0]` minus the last timestamp of the previous timed batch, or the nominal period if
+    /// there was none (or a sample without a timestamp came since). A row of NaN in `gyr`,
+    /// `acc` or `mag` means "no sample" of that sensor. Stops at the first refused sample (a
+    /// timestamp not after the previous one, a step above [`MAX_STEP_TIME`]), as
+    /// [`Ahrs::update_batch`] does.
+    #[allow(clippy::too_many_arguments)]
+    pub fn update_batch_timed(
+        &mut self,
+        time: &[f64],
+        gyr: &[[f64; 3]],
+        acc: &[[f64; 3]],
+        mag: Option<&[[f64; 3]]>,
+        quat: &mut [[f64; 4]],
+        spread: Option<&mut [f64]>,
+        health: Option<&mut [f64]>,
+    ) -> Result<()> {
+        self.batch(Some(time), gyr, acc, mag, quat, spread, health)
+    }
+
+    /// The batch calls: each sample with the nominal period or its timestamp's step.
+    #[allow(clippy::too_many_arguments)]
+    fn batch(
+        &mut self,
+        time: Option<&[f64]>,
+        gyr: &[[f64; 3]],
+        acc: &[[f64; 3]],
+        mag: Option<&[[f64; 3]]>,
+        quat: &mut [[f64; 4]],
         mut spread: Option<&mut [f64]>,
         mut health: Option<&mut [f64]>,
     ) -> Result<()> {
         let n = gyr.len();
         let lengths_ok = acc.len() == n
             && quat.len() == n
+            && time.is_none_or(|t| t.len() == n)
             && mag.is_none_or(|m| m.len() == n)
             && spread.as_ref().is_none_or(|s| s.len() == n)
             && health.as_ref().is_none_or(|h| h.len() == n);
@@ -519,17 +694,40 @@ impl Ahrs {
         }
         for k in 0..n {
             let m = mag.map(|m| &m[k]);
-            match spread.as_deref_mut() {
-                Some(s) => {
-                    s[k] = self
-                        .update_spread(&gyr[k], &acc[k], m)
-                        .map_err(|e| prefix(e, k))?
+            match time {
+                Some(t) => {
+                    let tk = t[k];
+                    let dt = match self.last_time {
+                        Some(last) => tk - last,
+                        None => self.params.sample_time,
+                    };
+                    if !tk.is_finite() || dt <= 0.0 {
+                        return Err(prefix(
+                            Error::InvalidArgument(format!(
+                                "timestamp {tk} s is not finite or not after the previous one \
+                                 (timestamps must increase strictly)"
+                            )),
+                            k,
+                        ));
+                    }
+                    self.step_dt(dt, &gyr[k], &acc[k], m)
+                        .map_err(|e| prefix(e, k))?;
+                    self.last_time = Some(tk);
                 }
                 None => self.update(&gyr[k], &acc[k], m).map_err(|e| prefix(e, k))?,
             }
+            if let Some(s) = spread.as_deref_mut() {
+                let mut out = [0.0; 4];
+                self.angular_spread(&mut out).map_err(|e| prefix(e, k))?;
+                s[k] = out[3];
+            }
             quat[k] = self.quaternion();
             if let Some(h) = health.as_deref_mut() {
-                h[k] = self.sample_state.health.readout(None).score;
+                h[k] = self
+                    .sample_state
+                    .health
+                    .readout(None, &self.sample_state.times)
+                    .score;
             }
         }
         Ok(())
@@ -552,72 +750,138 @@ impl Ahrs {
 }
 
 /// One sample after the first (the per-sensor steps of the module documentation) on the
-/// working copies; returns the gyroscope increment and whether the field sample was used.
+/// working copies, `h` seconds after the previous one; returns the gyroscope increment and
+/// whether the field sample was used.
+#[allow(clippy::too_many_arguments)]
 fn step(
     p: &AhrsParams,
-    c: &Coeffs,
+    nominal: &Coeffs,
     core: &mut Core<4>,
     s: &mut SampleState,
-    gyr: &[f64; 3],
+    h: f64,
+    gyr: Option<&[f64; 3]>,
     acc: Option<&[f64; 3]>,
     mag: Option<&[f64; 3]>,
 ) -> Result<([f64; 4], bool)> {
     let dt = p.sample_time;
+    // the first-order filters' coefficients for this step, and the number of nominal samples
+    // the second-order filters take it as (a zero-order hold over dropped samples)
+    let c = &nominal.at_step(p, h);
+    let repeat = (h / dt).round().clamp(1.0, 1e6) as u32;
+
+    // A sensor back after a loss longer than its averaging time restarts its average: what
+    // the old one holds was turned by the gyroscope alone since (module `timing`). So does a
+    // sensor whose average a gyroscope gap turned with a carried rate by more than the
+    // sensor's own noise.
+    if let Some(a) = acc {
+        if s.times.acc_missing > p.acc_tau || s.restart_acc {
+            s.acc_filter = InertialLowPass::new(c.acc, c.acc_warmup, a);
+            s.restart_acc = false;
+        }
+    }
+    if mag.is_some() && (s.times.mag_missing > p.mag_tau || s.restart_mag) {
+        s.mag.restart_average();
+        s.restart_mag = false;
+    }
 
     // 1. Rest detection and the bias at rest.
     // The deviations are taken from the samples band-limited to REST_NOISE_TIME, so that the
     // test sees the same noise at every sample rate (a raw sample's noise grows with √rate:
     // at 1 kHz a MEMS gyroscope's alone exceeds the threshold now and then, and no rest lasts).
-    let mut da = f64::INFINITY;
-    for ((lp, fast), x) in s.gyr_lp.iter_mut().zip(s.gyr_fast.iter_mut()).zip(gyr) {
-        *lp += c.rest_filter * (x - *lp);
-        *fast += c.rest_noise * (x - *fast);
-    }
-    if let Some(a) = acc {
-        for ((lp, fast), x) in s.acc_lp.iter_mut().zip(s.acc_fast.iter_mut()).zip(a) {
+    // Without a gyroscope sample the test and the rest's timer wait for the next one.
+    if let Some(gyr) = gyr {
+        let mut da = f64::INFINITY;
+        for ((lp, fast), x) in s.gyr_lp.iter_mut().zip(s.gyr_fast.iter_mut()).zip(gyr) {
             *lp += c.rest_filter * (x - *lp);
             *fast += c.rest_noise * (x - *fast);
         }
-        let (f, l) = (&s.acc_fast, &s.acc_lp);
-        da = norm3(&[f[0] - l[0], f[1] - l[1], f[2] - l[2]]);
-    }
-    let (f, g) = (&s.gyr_fast, &s.gyr_lp);
-    let dg = norm3(&[f[0] - g[0], f[1] - g[1], f[2] - g[2]]);
-    let still = dg < p.rest_gyro && da < p.rest_acc && norm3(g) < 2.0 * p.bias_max;
-    s.rest_timer = if still { s.rest_timer + dt } else { 0.0 };
-    s.rest.push(still, gyr, dt);
-    if s.rest_timer >= p.rest_time {
-        if let Some((mean, var)) = s.rest.take(p.gyro_noise * p.gyro_noise / dt) {
-            s.bias.rest(&Vector3::from(mean), var);
-            s.bias.clip(p.bias_max);
+        if let Some(a) = acc {
+            for ((lp, fast), x) in s.acc_lp.iter_mut().zip(s.acc_fast.iter_mut()).zip(a) {
+                *lp += c.rest_filter * (x - *lp);
+                *fast += c.rest_noise * (x - *fast);
+            }
+            let (f, l) = (&s.acc_fast, &s.acc_lp);
+            da = norm3(&[f[0] - l[0], f[1] - l[1], f[2] - l[2]]);
+        }
+        let (f, g) = (&s.gyr_fast, &s.gyr_lp);
+        let dg = norm3(&[f[0] - g[0], f[1] - g[1], f[2] - g[2]]);
+        let still = dg < p.rest_gyro && da < p.rest_acc && norm3(g) < 2.0 * p.bias_max;
+        s.rest_timer = if still { s.rest_timer + h } else { 0.0 };
+        s.rest.push(still, gyr, h);
+        if s.rest_timer >= p.rest_time {
+            if let Some((mean, var)) = s.rest.take(p.gyro_noise * p.gyro_noise / dt) {
+                s.bias.rest(&Vector3::from(mean), var);
+                s.bias.clip(p.bias_max);
+            }
         }
     }
 
-    // 2. Gyroscope: the exact turn, the process noise accumulated.
+    // 2. Gyroscope: the exact turn, the process noise accumulated. A sample covers one
+    // nominal period; the rest of a longer interval (dropped samples) is bridged with the
+    // mean of the last and this rate, a missing sample with the last rate (module `timing`).
     let b = s.bias.b;
-    let w = [
-        (gyr[0] - b[0]) * dt,
-        (gyr[1] - b[1]) * dt,
-        (gyr[2] - b[2]) * dt,
-    ];
-    let rate = norm3(&w) / dt;
-    let dq = q4::from_rotation_vector(&w);
+    let (omega, bridged, held) = match gyr {
+        Some(g) => {
+            let omega = [g[0] - b[0], g[1] - b[1], g[2] - b[2]];
+            if h > 1.5 * dt {
+                let bridge = s.hold.bridge(&omega);
+                (omega, Some((bridge, h - dt)), false)
+            } else {
+                (omega, None, false)
+            }
+        }
+        None => (s.hold.rate(), None, true),
+    };
+    let covered = match (gyr.is_some(), bridged) {
+        (false, _) => 0.0,
+        (true, Some(_)) => dt,
+        (true, None) => h,
+    };
+    let w = scale3(&omega, if held { h } else { covered });
+    let rate = norm3(&omega);
+    let mut dq = q4::from_rotation_vector(&w);
+    if let Some((bridge, u)) = bridged {
+        dq = q4::mul(&q4::from_rotation_vector(&scale3(&bridge, u)), &dq);
+    }
     core.rotate(&dq);
+    // The carried rate's error grows with the whole stretch without a gyroscope sample, not
+    // sample by sample: add what this step adds to the stretch's variance.
+    let extra = if held {
+        let gap = s.times.gyr_missing + h;
+        s.hold.extrapolation_variance(gap, true) - s.hold.extrapolation_variance(gap - h, true)
+    } else {
+        s.hold.extrapolation_variance(h - covered, false)
+    };
+    if held {
+        s.gap_var += extra;
+        s.gap_in_period = true;
+    } else if s.gap_var > 0.0 {
+        // the gap is over: the averages it turned by more than their noise restart
+        let turned = 3.0 * s.gap_var;
+        s.restart_acc |= turned > p.acc_noise * p.acc_noise;
+        s.restart_mag |= turned > p.mag_noise * p.mag_noise;
+        s.gap_var = 0.0;
+    }
+    if let Some(g) = gyr {
+        s.hold.push(&[g[0] - b[0], g[1] - b[1], g[2] - b[2]], h);
+    }
+    // the turn the latency compensation extrapolates: the rate over one nominal period
+    let w_lead = scale3(&omega, dt);
     let scale = p.gyro_scale_noise * rate;
     // at most 1 rad² per sample: a wider noise is uniform for all purposes
-    let q = ((p.gyro_noise * p.gyro_noise + scale * scale) * dt).min(1.0);
+    let q = ((p.gyro_noise * p.gyro_noise + scale * scale) * h + extra).min(1.0);
     // the bias's random walk: variance per second
     let walk = if p.bias_time > 0.0 {
         p.bias_std * p.bias_std / p.bias_time
     } else {
         0.0
     };
-    let mut drift = walk * dt;
+    let mut drift = walk * h;
     // Over a rest the bias is one constant, which the rest's samples measure (module `rest`):
     // its random walk is held, and added when the rest ends as the variance of a random walk's
     // end about its mean over the phase (a third of the walk's variance over the phase).
     if s.rest_timer >= p.rest_time {
-        s.rest_held += dt;
+        s.rest_held += h;
         drift = 0.0;
     } else if s.rest_held > 0.0 {
         drift += walk * s.rest_held / 3.0;
@@ -625,7 +889,7 @@ fn step(
     }
     let r = q4::to_matrix(&dq);
     s.bias
-        .predict(&Matrix3::from_fn(|i, j| r[i][j]), dt, q, drift);
+        .predict(&Matrix3::from_fn(|i, j| r[i][j]), h, q, drift);
     // the estimate is clipped to ±bias_max: its variance need not grow beyond (2·bias_max)²
     let cap = 3.0 * 4.0 * p.bias_max * p.bias_max;
     if s.bias.p.trace() > cap {
@@ -634,36 +898,42 @@ fn step(
 
     // 3. Accelerometer: low-passed in the gyroscope-integrated frame.
     s.acc_filter.turn(&dq);
+    let mut acc_used = false;
     if let Some(a) = acc {
-        let a = turn_forward(a, &w, c.acc_lead);
+        let a = turn_forward(a, &w_lead, c.acc_lead);
         if norm3(&a) >= 0.25 * p.gravity {
-            s.acc_filter.step(&a);
+            for _ in 0..repeat {
+                s.acc_filter.step(&a);
+            }
+            acc_used = true;
         }
     }
 
     // 4. Magnetometer: disturbance phases and the world-frame average.
     let mag_used = match mag {
         Some(m) => {
-            let m = turn_forward(m, &w, c.mag_lead);
-            let used = s.mag.observe(&core.mode(), &m, rate, p, c);
-            s.health.mag_sample(used, dt);
+            let m = turn_forward(m, &w_lead, c.mag_lead);
+            let used = s.mag.observe(&core.mode(), &m, rate, h, repeat, p, c);
+            s.health.mag_sample(used, h);
             used
         }
         None => false,
     };
+    s.times
+        .sample(h, gyr.is_some(), acc_used, mag.is_some(), mag_used);
 
-    // 5. Correction.
-    s.since += 1;
-    if s.since >= c.correct_every {
-        correct(p, c, core, s)?;
-        s.since = 0;
+    // 5. Correction, once the samples since the last one span the correction period (the
+    // same cadence as `correct_every` nominal samples).
+    if s.times.period >= c.correct_time - 0.5 * dt {
+        correct(p, core, s)?;
     }
     Ok((dq, mag_used))
 }
 
 /// The correction step (module documentation, step 5).
-fn correct(p: &AhrsParams, c: &Coeffs, core: &mut Core<4>, s: &mut SampleState) -> Result<()> {
-    let t = c.correct_time;
+fn correct(p: &AhrsParams, core: &mut Core<4>, s: &mut SampleState) -> Result<()> {
+    // the period's length and the time the sensors' samples covered in it (module `timing`)
+    let (t, t_acc, t_mag) = s.times.take_period();
     let noise = s.bias.take_pending();
     core.compose_moment(&Vector4::from(s.omega), &noise_moment(&noise))?;
     let lam_prior = {
@@ -676,29 +946,33 @@ fn correct(p: &AhrsParams, c: &Coeffs, core: &mut Core<4>, s: &mut SampleState) 
     let mut observed = false;
     let an = norm3(&s.acc_filter.y);
     let mut tilt = None;
-    if an >= 0.25 * p.gravity && an.is_finite() {
+    if t_acc > 0.0 && an >= 0.25 * p.gravity && an.is_finite() {
         let excess = (an - p.gravity) / p.acc_reject;
         let widen = 1.0 + excess * excess;
-        let kappa = t / (p.acc_noise * p.acc_noise * p.acc_tau) / widen;
+        let kappa = t_acc / (p.acc_noise * p.acc_noise * p.acc_tau) / widen;
         let up_b = scale3(&s.acc_filter.y, 1.0 / an);
         evidence += observation_exponent(&up_b, &UP, kappa);
         observed = true;
         tilt = Some((up_b, p.acc_noise * p.acc_noise * widen));
     }
-    let heading = s.mag.heading_error();
+    let heading = if t_mag > 0.0 {
+        s.mag.heading_error()
+    } else {
+        None
+    };
     if let Some(delta) = heading {
-        let kappa = t / (p.mag_noise * p.mag_noise * p.mag_tau);
+        let kappa = t_mag / (p.mag_noise * p.mag_noise * p.mag_tau);
         let rz = [(0.5 * delta).cos(), 0.0, 0.0, (0.5 * delta).sin()];
         evidence += heading_exponent(&q4::mul(&rz, &q_prior), kappa);
         observed = true;
     }
-    s.health.correction(
+    let innovation = s.health.correction(
         t,
         &lam_prior,
         &q4::rotate_inverse(&q_prior, &UP),
         tilt.as_ref().map(|(b, v)| (b, *v)),
         heading.map(|d| (d, p.mag_noise * p.mag_noise)),
-        an.is_finite().then(|| (an - p.gravity) / p.acc_reject),
+        (t_acc > 0.0 && an.is_finite()).then(|| (an - p.gravity) / p.acc_reject),
     );
     if observed {
         core.update_precision(&evidence)?;
@@ -726,9 +1000,32 @@ fn correct(p: &AhrsParams, c: &Coeffs, core: &mut Core<4>, s: &mut SampleState) 
         Vector3::from(cross3(&up_post, &up_prior))
     };
     // At rest the gyroscope measures the bias directly (module `rest`), far better than the
-    // corrections can: they do not teach it then.
-    let learn = p.bias_time > 0.0 && s.rest_timer < p.rest_time;
+    // corrections can: they do not teach it then. Nor after a gyroscope gap in the period: the
+    // move of the mode then answers the carried rate's error, not the bias.
+    // Nor from an innovation the prior calls impossible (beyond OUTLIER standard deviations:
+    // a start far off, a wrong state set): the coupling is a linear-Gaussian model of small
+    // errors, and read literally the moves that such an innovation makes are a bias of degrees
+    // per second.
+    // An innovation or a move larger than LINEAR_MOVE is beyond that model too, whatever the
+    // prior's spread: the state is recovering from a large error, not tracking a bias.
+    let up_prior_b = q4::rotate_inverse(&q_prior, &UP);
+    let tilt_angle = tilt.as_ref().map_or(0.0, |(b, _)| {
+        norm3(&cross3(b, &up_prior_b)).atan2(vec3::dot3(b, &up_prior_b))
+    });
+    let heading_angle = heading.map_or(0.0, f64::abs);
+    let recovering = s.gap_in_period
+        || innovation > OUTLIER * OUTLIER
+        || mu.norm() > LINEAR_MOVE
+        || tilt_angle.max(heading_angle) > LINEAR_MOVE;
+    let learn = p.bias_time > 0.0 && s.rest_timer < p.rest_time && !recovering;
+    s.gap_in_period = false;
     s.bias.correct(&lam_prior, &mu, &sigma_post, learn);
+    if recovering {
+        // what the recovery taught the orientation is not evidence about the bias: the
+        // coupling starts afresh, so that the next correction does not read the recovery's
+        // moves as the effect of a bias
+        s.bias.c = Matrix3::zeros();
+    }
     s.bias.clip(p.bias_max);
 
     // The heading correction turns the field's average with it.

@@ -13,6 +13,12 @@ pub const MIN_SAMPLE_TIME: f64 = 1e-6;
 /// Rust) takes the rate instead.
 pub const MAX_SAMPLE_TIME: f64 = 1.0;
 
+/// The largest time step (s) of one sample (`BINGHAM_AHRS_MAX_STEP_TIME` in C): a gap up to 10 s
+/// is predicted through (the gyroscope's last rate held, the spread widened by what that
+/// cannot know); a longer one is refused, as it is more likely a timestamp error (ms for s, a
+/// clock reset) than a stream that resumed.
+pub const MAX_STEP_TIME: f64 = 10.0;
+
 /// The smallest process noise per step (rad) the AHRS accepts (`gyro_noise·√sample_time`): below
 /// it the state's concentrations could grow past what the moment matching resolves.
 pub const MIN_STEP_NOISE: f64 = 1e-6;

@@ -156,10 +156,13 @@ pub unsafe extern "C" fn bingham_ahrs_clone(
     })
 }
 
-/// Processes one sample.
+/// Processes one sample, taken `sample_time` (the parameters') after the previous one; with
+/// its own time step: `bingham_ahrs_update_dt()`.
 ///
-/// - `gyr`: angular rate, rad/s, sensor frame (3 doubles). Required in every sample: a NaN or
-///   ±Inf entry refuses the sample.
+/// - `gyr`: angular rate, rad/s, sensor frame (3 doubles). A NaN or ±Inf entry means "no
+///   gyroscope sample" at this time (a gap, not an error): the orientation is carried on with
+///   the last rate, and what that cannot know widens the spread (`gyr_missing_time` of the
+///   health readout counts the gap).
 /// - `acc`: specific force, m/s², sensor frame (+g up at rest). A NaN or ±Inf entry means "no
 ///   accelerometer sample" at this time (not an error): the gyroscope and the magnetometer of
 ///   the sample are still used. Its update is also skipped (not an error) when
@@ -170,9 +173,10 @@ pub unsafe extern "C" fn bingham_ahrs_clone(
 ///   (not an error). A zero field, a field along the vertical or a disturbed field is skipped.
 ///
 /// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `gyr`, `acc`), `BINGHAM_ERR_INVALID_ARGUMENT`
-/// (NaN/Inf in `gyr`; a first sample without a finite accelerometer showing gravity),
-/// `BINGHAM_ERR_NOT_CONVERGED` / `BINGHAM_ERR_NUMERICAL` (internal). On error the AHRS is
-/// unchanged: the sample is refused.
+/// (a gyroscope sample turning by more than 1e6 rad in one sample: not a rate; a
+/// first sample without a finite accelerometer showing gravity), `BINGHAM_ERR_NOT_CONVERGED`
+/// / `BINGHAM_ERR_NUMERICAL` (internal). On error the AHRS is unchanged: the sample is
+/// refused.
 ///
 /// # Safety
 /// `a`: a live handle; `gyr`, `acc`: 3 readable doubles each; `mag`: `NULL` or 3 readable
@@ -187,11 +191,46 @@ pub unsafe extern "C" fn bingham_ahrs_update(
     guard("bingham_ahrs_update", || {
         // SAFETY: caller contract.
         let ahrs = unsafe { handle_mut("a", a)? };
-        // SAFETY: caller contract; 3 doubles each. A non-finite `gyr` is refused here; NaN/Inf
-        // in `acc` or `mag` means "no sample" of that sensor (the core decides).
-        let (g, ac, m) = unsafe { args!(gyr: [3], acc: raw [3], mag: opt raw [3]).read()? };
+        // SAFETY: caller contract; 3 doubles each. NaN/Inf in any of them means "no sample"
+        // of that sensor (the core decides).
+        let (g, ac, m) = unsafe { args!(gyr: raw [3], acc: raw [3], mag: opt raw [3]).read()? };
         let m = m.map(vec3);
         ahrs.inner.update(&vec3(g), &vec3(ac), m.as_ref())?;
+        Ok(())
+    })
+}
+
+/// Processes one sample taken `dt` seconds after the previous one (its own time step: jitter,
+/// dropped packets, a variable rate), otherwise as `bingham_ahrs_update()`. The gyroscope's
+/// turn, the process noise, the bias's random walk and the filters' time constants use `dt`;
+/// a gyroscope sample is taken to cover one `sample_time`, and a longer interval's remainder
+/// (dropped samples) is bridged with the mean of the last and this rate, its uncertainty added
+/// to the spread. `dt` of the very first sample is not used; a `dt` within a millionth of
+/// `sample_time` is taken as `sample_time` (uniformly spaced timestamps then give the results of
+/// `bingham_ahrs_update()` bit for bit).
+///
+/// Errors: those of `bingham_ahrs_update()`, and `BINGHAM_ERR_INVALID_ARGUMENT` for `dt` not
+/// finite or outside `BINGHAM_AHRS_MIN_SAMPLE_TIME` (1e-6 s) to `BINGHAM_AHRS_MAX_STEP_TIME`
+/// (10 s). On error the AHRS is unchanged.
+///
+/// # Safety
+/// `a`: a live handle; `gyr`, `acc`: 3 readable doubles each; `mag`: `NULL` or 3 readable
+/// doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_update_dt(
+    a: *mut bingham_ahrs,
+    dt: f64,
+    gyr: *const f64,
+    acc: *const f64,
+    mag: *const f64,
+) -> bingham_status {
+    guard("bingham_ahrs_update_dt", || {
+        // SAFETY: caller contract.
+        let ahrs = unsafe { handle_mut("a", a)? };
+        // SAFETY: caller contract; 3 doubles each (NaN/Inf: "no sample" of that sensor).
+        let (g, ac, m) = unsafe { args!(gyr: raw [3], acc: raw [3], mag: opt raw [3]).read()? };
+        let m = m.map(vec3);
+        ahrs.inner.update_dt(dt, &vec3(g), &vec3(ac), m.as_ref())?;
         Ok(())
     })
 }
@@ -206,13 +245,14 @@ fn vec3(s: &[f64]) -> [f64; 3] {
 /// - `gyr`, `acc`: n×3 row-major; `mag`: n×3 row-major or `NULL`.
 /// - `quat`: n×4 row-major output (w, x, y, z per row, sensor → world ENU, w ≥ 0).
 ///
-/// Per channel, as in `bingham_ahrs_update()`: a row of `acc` or `mag` holding NaN (or ±Inf)
-/// means "no sample" of that sensor at that time, so sensors sampled at lower rates than the
-/// gyroscope, or with gaps, fit in one batch (fill their missing rows with NaN); every row of
-/// `gyr` must be finite.
+/// Per channel, as in `bingham_ahrs_update()`: a row of `gyr`, `acc` or `mag` holding NaN (or
+/// ±Inf) means "no sample" of that sensor at that time, so sensors sampled at lower rates than
+/// the gyroscope, or with gaps, fit in one batch (fill their missing rows with NaN); a missing
+/// gyroscope row is a gap the AHRS carries the orientation through.
 ///
-/// A refused sample (see `bingham_ahrs_update()`: NaN/Inf in its `gyr` row, or a first sample
-/// without a finite accelerometer showing gravity) stops the batch: the samples before it are
+/// A refused sample (see `bingham_ahrs_update()`: a gyroscope row turning by more than
+/// 1e6 rad, or a first sample without a finite accelerometer showing gravity)
+/// stops the batch: the samples before it are
 /// processed and their rows of `quat` written, the refused one changes nothing, the rest are
 /// untouched; the error message names the sample's index ("sample k: ..."). `n = 0` does
 /// nothing.
@@ -293,6 +333,54 @@ pub unsafe extern "C" fn bingham_ahrs_update_batch_health(
     guard("bingham_ahrs_update_batch_health", || {
         // SAFETY: forwarded caller contract.
         unsafe { batch_health(a, n, gyr, acc, mag, quat, spread, health) }
+    })
+}
+
+/// As `bingham_ahrs_update_batch_health()`, with a timestamp per sample: `t` (n doubles,
+/// seconds, strictly increasing, any origin) is when each sample was taken, and each is
+/// processed with its own time step, as `bingham_ahrs_update_dt()`: `t[k] - t[k-1]`; for
+/// `t[0]`, the step from the last timestamp of the previous timed batch on this AHRS, or
+/// `sample_time` if there was none (or an untimed update came since). So dropped packets,
+/// jitter and a variable rate are modelled; a batch may be split anywhere.
+///
+/// Errors: those of `bingham_ahrs_update_batch_health()`, and `BINGHAM_ERR_INVALID_ARGUMENT`
+/// for a timestamp that is not finite or not after the previous one, or a step above
+/// `BINGHAM_AHRS_MAX_STEP_TIME` (10 s): the batch stops there, as for any refused sample
+/// (the rows before it written, the message names the index).
+///
+/// # Safety
+/// As `bingham_ahrs_update_batch_health()`; `t`: n readable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_update_batch_timed(
+    a: *mut bingham_ahrs,
+    n: usize,
+    t: *const f64,
+    gyr: *const f64,
+    acc: *const f64,
+    mag: *const f64,
+    quat: *mut f64,
+    spread: *mut f64,
+    health: *mut f64,
+) -> bingham_status {
+    guard("bingham_ahrs_update_batch_timed", || {
+        // SAFETY: caller contract.
+        let ahrs = unsafe { handle_mut("a", a)? };
+        // SAFETY: caller contract: n timestamps, n rows of 3 readable and of 4 (and n)
+        // writable doubles, not overlapping.
+        let (t, g, ac, q, m, s, h) = unsafe {
+            args!(
+                t: raw [n],
+                gyr: rows [n; 3],
+                acc: rows [n; 3],
+                quat: mut rows [n; 4],
+                mag: opt rows [n; 3],
+                spread: opt mut [n],
+                health: opt mut [n]
+            )
+            .read()?
+        };
+        ahrs.inner.update_batch_timed(t, g, ac, m, q, s, h)?;
+        Ok(())
     })
 }
 
@@ -531,6 +619,35 @@ pub unsafe extern "C" fn bingham_ahrs_gyro_bias_covariance(
         unsafe {
             getter(a, args!(cov: out [9]), |ahrs, v| {
                 v.copy_from_slice(&ahrs.gyro_bias_covariance());
+                Ok(())
+            })
+        }
+    })
+}
+
+/// The covariance of the orientation error, 3×3 row-major in rad², for
+/// `sensor_msgs/Imu.orientation_covariance`: the error as a rotation vector `phi` in the world
+/// frame (ENU: x east, y north, z up; REP 103), `q_true = exp(phi/2) ⊗ q_est`, with `q_est`
+/// the orientation of `bingham_ahrs_quaternion()` (sensor → world). From the state's second
+/// moments plus the process noise since the last correction: its trace is the square of the
+/// total angular spread (`bingham_ahrs_angular_spread()`'s `spread[3]`). Before the first
+/// sample: the identity (a uniform orientation's spread).
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `cov`), `BINGHAM_ERR_NUMERICAL` (internal). On
+/// error nothing is written.
+///
+/// # Safety
+/// `a`: a live handle; `cov`: 9 writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_orientation_covariance(
+    a: *const bingham_ahrs,
+    cov: *mut f64,
+) -> bingham_status {
+    guard("bingham_ahrs_orientation_covariance", || {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            getter(a, args!(cov: out [9]), |ahrs, v| {
+                v.copy_from_slice(&ahrs.orientation_covariance()?);
                 Ok(())
             })
         }

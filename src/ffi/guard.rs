@@ -184,7 +184,14 @@ pub(crate) unsafe fn read_raw<'a>(name: &str, p: *const f64, len: usize) -> FfiR
         return Ok(&[]);
     }
     need(name, p)?;
-    // SAFETY: as in `read`.
+    // a length given directly by the caller (`n` samples): refused before a slice that large
+    // is formed, which would be undefined behaviour whatever memory is there
+    if len > isize::MAX as usize / std::mem::size_of::<f64>() {
+        return Err(Failure::dimension(format!(
+            "`{name}`: {len} elements overflow"
+        )));
+    }
+    // SAFETY: as in `read`; `len * 8 <= isize::MAX` checked above.
     Ok(unsafe { std::slice::from_raw_parts(p, len) })
 }
 

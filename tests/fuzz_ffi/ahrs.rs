@@ -2,23 +2,35 @@
 //!
 //! One case is an AHRS (sample time, latencies, bias_std and gyro_scale_noise sometimes hostile;
 //! valid values kept, so the compensation and the bias's uncertainty run on the hostile samples
-//! too) fed a simulated IMU stream through bingham_ahrs_update and the three batch functions
-//! (`_update_batch`, `_spread`, `_health`; the optional outputs sometimes NULL), with
-//! hostile samples mixed in (NaN/Inf, zero and huge vectors, subnormals, NULL and misaligned
-//! pointers, also for every argument of a batch, a NaN in the middle of a batch) and
-//! bingham_ahrs_set_state calls (valid starts near the truth, any orthogonal M, huge / tiny /
-//! repeated z, z spanning more than a double, non-orthogonal M, NaN/Inf), and a twin that
-//! receives only the calls that were accepted. A NaN/Inf gyroscope entry must be refused, a
-//! NaN/Inf accelerometer or magnetometer entry means "no sample" of that sensor and must be
-//! accepted (except the accelerometer of the first sample, refused: no tilt to start from).
+//! too) fed a simulated IMU stream through bingham_ahrs_update, bingham_ahrs_update_dt (each
+//! sample's own step: nominal, jittered, over dropped samples, the bounds 1e-6 and 10 s, or
+//! hostile: 0, negative, NaN/Inf, below 1e-6, above 10, subnormal, huge) and the four batch
+//! functions (`_update_batch`, `_spread`, `_health`, `_timed`; the optional outputs sometimes
+//! NULL; the timed batch's timestamps nominal, jittered, over dropped samples, exactly uniform,
+//! or with one hostile timestamp: NaN/Inf, equal to or before the previous one, a step beyond
+//! 10 s or below 1e-6 s, or exactly 10 s), with hostile samples mixed in (NaN/Inf, zero and huge
+//! vectors, subnormals, NULL and misaligned pointers, also for every argument of a batch, a NaN
+//! or a huge gyroscope row in the middle of a batch, the magnetometer's input overlapping the
+//! accelerometer's) and bingham_ahrs_set_state calls (valid starts near the truth, any
+//! orthogonal M, huge / tiny / repeated z, z spanning more than a double, non-orthogonal M,
+//! NaN/Inf), and a twin that receives only the calls that were accepted (a timed batch as timed
+//! batches of one sample: split anywhere, the same). A NaN/Inf entry of any sensor means "no
+//! sample" of that sensor and must be accepted (the gyroscope's a gap: afterwards the health
+//! readout's gyr_missing_time has grown by the step, and is 0 after a usable rate), except the
+//! accelerometer of the first sample (refused: no tilt to start from); a finite gyroscope turning
+//! by more than 1e6 rad in its step, a step outside 1e-6..10 s and a bad timestamp are refused.
 //! After every call: a refused call leaves the AHRS
-//! bit-for-bit unchanged (quaternion, state, bias, spread, and the hidden state, through the
-//! twin) and the message names the function (and for a batch the sample); a batch writes the
-//! rows of the samples before the refused one only, and nothing on a NULL / misaligned argument;
-//! its quaternion, spread and health rows equal, bit for bit, what the twin's getters give after
-//! it replays the same samples one by one; accepted calls leave a
-//! unit quaternion with w ≥ 0, a valid Bingham state, finite bias and spread; after set_state
-//! the state is the normalized Bingham(M, z) and the quaternion ± its mode.
+//! bit-for-bit unchanged (quaternion, state, bias, spread, orientation covariance, health
+//! readout, and the hidden state, through the twin) and the message names the function (and for
+//! a batch the sample; for a bad step "dt"); a batch writes the rows of the samples before the
+//! refused one only, and nothing on a NULL / misaligned argument; its quaternion, spread and
+//! health rows equal, bit for bit, what the twin's getters give after it replays the same samples
+//! one by one; bingham_ahrs_update_dt with the nominal step equals bingham_ahrs_update on a
+//! clone, and a timed batch with uniformly spaced timestamps the untimed batch on a clone, bit
+//! for bit; accepted calls leave a unit quaternion with w ≥ 0, a valid Bingham state, finite
+//! bias and spread, an orientation covariance symmetric positive semi-definite with the squared
+//! total spread as its trace; after set_state the state is the normalized Bingham(M, z) and the
+//! quaternion ± its mode.
 
 use bingham::ffi::bingham_status::*;
 use bingham::ffi::*;
@@ -26,8 +38,8 @@ use testkit::fuzz::{check_unit, non_finite, Buf};
 use testkit::Rng64;
 
 use crate::ahrs_inputs::{
-    ahrs_bits, ahrs_sentinel, ahrs_state_args, ahrs_state_expected, check_set_state, spoil_sample,
-    Imu,
+    ahrs_bits, ahrs_health, ahrs_sentinel, ahrs_state_args, ahrs_state_expected, check_set_state,
+    gyro_kind, spoil_sample, Gyro, Imu, STEP_RANGE,
 };
 use crate::drivers::{cases_for, run_sequences, SHARE_AHRS};
 use crate::status::{check_error_message, last_error, prime_last_error, status_name};
@@ -225,6 +237,8 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
     let steps = 5 + rng.below(40);
     // whether a sample has been accepted (the first one must have a finite accelerometer)
     let mut initialized = false;
+    // the last timestamp of the timed batches (None before one and after an untimed sample)
+    let mut last_t: Option<f64> = None;
     let mut result = Ok(());
     for step in 0..steps {
         let before = match ahrs_bits(a) {
@@ -237,22 +251,36 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
         let r = rng.below(11);
         let res: Result<(), String> = (|| {
             if r < 6 {
-                // --- one sample
-                let mut s = imu.sample(&mut rng, dt);
+                // --- one sample: bingham_ahrs_update, or bingham_ahrs_update_dt with its own
+                // time step (nominal, jittered, dropped samples, the bounds, or hostile)
+                let timed = rng.chance(0.4);
+                let h_dt = if timed { pick_step(&mut rng, dt) } else { dt };
+                let step_ok = STEP_RANGE.contains(&h_dt);
+                let mut s = imu.sample(&mut rng, if step_ok { h_dt } else { dt });
                 let (mut non_finite_in, mut desc) = (None, String::new());
                 if rng.chance(0.25) {
                     (non_finite_in, desc) = spoil_sample(&mut rng, &mut s);
                 }
                 let mag_null = !use_mag || rng.chance(0.1);
-                // NaN/Inf: the gyroscope's refuses the sample, the accelerometer's only the first
-                // one, the magnetometer's never ("no sample" of that sensor)
-                let refuse = match non_finite_in {
-                    Some(0) => true,
-                    Some(1) => !initialized,
-                    _ => false,
-                };
+                // the gyroscope: a rate, a gap (NaN/Inf: "no sample"), or refused (a turn above
+                // 1e6 rad in the step); NaN/Inf in the accelerometer refuses the first sample
+                // only, in the magnetometer never ("no sample" of that sensor)
+                let gyro = gyro_kind(&s[0], h_dt);
+                let refuse =
+                    !step_ok || gyro == Gyro::Refused || (non_finite_in == Some(1) && !initialized);
+                let orig = s;
                 let mut bufs: Vec<Buf> = s.iter().map(|v| Buf::from(v)).collect();
                 let mut ptr: Vec<*mut f64> = bufs.iter_mut().map(|b| b.ptr()).collect();
+                // overlapping inputs (valid: they are only read): the field read from the
+                // accelerometer's buffer, one double on
+                let mut shared = Buf::from(&[s[1][0], s[1][1], s[1][2], 25.0]);
+                let overlap = !mag_null && rng.chance(0.05);
+                if overlap {
+                    s[2] = [s[1][1], s[1][2], 25.0];
+                    ptr[1] = shared.ptr();
+                    ptr[2] = shared.ptr().wrapping_add(1);
+                    desc += " (mag overlapping acc)";
+                }
                 if mag_null {
                     ptr[2] = std::ptr::null_mut();
                 }
@@ -267,18 +295,52 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                         _ => ptr[rng.below(2)] = bufs[0].misaligned(3),
                     }
                 }
-                prime_last_error("bingham_ahrs_update");
-                let st = unsafe { bingham_ahrs_update(ap, ptr[0], ptr[1], ptr[2]) };
+                let name = if timed {
+                    "bingham_ahrs_update_dt"
+                } else {
+                    "bingham_ahrs_update"
+                };
+                // update_dt(sample_time) is update, bit for bit: a clone takes the update
+                let same_as_update = timed && h_dt == dt && !null && rng.chance(0.5);
+                let mut plain: *mut bingham_ahrs = std::ptr::null_mut();
+                if same_as_update && unsafe { bingham_ahrs_clone(a, &mut plain) } != BINGHAM_OK {
+                    return Err(format!("clone: {}", last_error()));
+                }
+                let health_before = ahrs_health(a)?;
+                prime_last_error(name);
+                let st = unsafe {
+                    if timed {
+                        bingham_ahrs_update_dt(ap, h_dt, ptr[0], ptr[1], ptr[2])
+                    } else {
+                        bingham_ahrs_update(ap, ptr[0], ptr[1], ptr[2])
+                    }
+                };
                 calls += 1;
                 if verbose {
                     eprintln!(
-                        "step {step}: update {s:?} mag {} {desc} null {null} -> {}",
+                        "step {step}: {name} dt {:e} {s:?} mag {} {desc} null {null} -> {}",
+                        h_dt,
                         !mag_null,
                         status_name(st)
                     );
                 }
                 if st == BINGHAM_ERR_PANIC {
                     return Err(format!("panic: {}", last_error()));
+                }
+                let kept = bufs.iter().zip(&orig).all(|(b, v)| {
+                    b.guards_ok()
+                        && b.values()
+                            .iter()
+                            .zip(v)
+                            .all(|(x, y)| x.to_bits() == y.to_bits())
+                }) && shared.guards_ok()
+                    && shared
+                        .values()
+                        .iter()
+                        .zip(orig[1].iter().chain(&[25.0]))
+                        .all(|(x, y)| x.to_bits() == y.to_bits());
+                if !kept {
+                    return Err(format!("{name} modified an input"));
                 }
                 let want = if null {
                     Some(BINGHAM_ERR_NULL_ARGUMENT)
@@ -289,47 +351,161 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                 };
                 expect(st, want, &desc)?;
                 if st != BINGHAM_OK {
-                    check_error_message("bingham_ahrs_update")?;
+                    check_error_message(name)?;
+                    if !step_ok && !null && !last_error().contains("dt") {
+                        return Err(format!("the message does not name dt: {}", last_error()));
+                    }
                     if ahrs_bits(a)? != before {
                         return Err(format!(
                             "refused sample ({}) changed the AHRS",
                             status_name(st)
                         ));
                     }
-                    // a sample whose accelerometer or magnetometer is missing (NaN) is as
-                    // clean as any once the AHRS has started
-                    let clean = desc.is_empty() || (non_finite_in.is_some() && initialized);
-                    if !refuse && !null && clean && valid_dt && dt <= 0.1 {
+                    // a sample whose gyroscope, accelerometer or magnetometer is missing (NaN) is
+                    // as clean as any once the AHRS has started (the gyroscope's before that too)
+                    let clean = desc.is_empty()
+                        || non_finite_in == Some(0)
+                        || (non_finite_in.is_some() && initialized);
+                    if !refuse && !null && clean && gyro != Gyro::Ambiguous && valid_dt && dt <= 0.1
+                    {
                         return Err(format!("a clean sample refused: {}", last_error()));
+                    }
+                    if !plain.is_null() {
+                        unsafe { bingham_ahrs_free(plain) };
                     }
                     return Ok(());
                 }
-                let st2 = unsafe { bingham_ahrs_update(twin, ptr[0], ptr[1], ptr[2]) };
+                // the twin gets the same values from separate buffers
+                let mp = if mag_null {
+                    std::ptr::null()
+                } else {
+                    s[2].as_ptr()
+                };
+                let st2 = unsafe {
+                    if timed {
+                        bingham_ahrs_update_dt(twin, h_dt, s[0].as_ptr(), s[1].as_ptr(), mp)
+                    } else {
+                        bingham_ahrs_update(twin, s[0].as_ptr(), s[1].as_ptr(), mp)
+                    }
+                };
                 if st2 != BINGHAM_OK {
                     return Err(format!("twin refused an accepted sample: {}", last_error()));
                 }
+                if !plain.is_null() {
+                    let st3 =
+                        unsafe { bingham_ahrs_update(plain, s[0].as_ptr(), s[1].as_ptr(), mp) };
+                    let same = st3 == BINGHAM_OK && ahrs_bits(plain)? == ahrs_bits(a)?;
+                    unsafe { bingham_ahrs_free(plain) };
+                    if !same {
+                        return Err(format!(
+                            "update_dt(sample_time) differs from update ({})",
+                            status_name(st3)
+                        ));
+                    }
+                }
+                // the gyroscope's missing time: 0 after a rate, grown by the step after a gap
+                let h = ahrs_health(a)?;
+                let grown = health_before.gyr_missing_time + h_dt;
+                let ok = match gyro {
+                    Gyro::Usable => h.gyr_missing_time == 0.0,
+                    Gyro::Gap if initialized => {
+                        (h.gyr_missing_time - grown).abs() <= 1e-6 * h_dt + 1e-12 * grown
+                    }
+                    _ => true,
+                };
+                if !ok {
+                    return Err(format!(
+                        "gyr_missing_time {:e} after a {gyro:?} gyroscope sample (before {:e}, step {h_dt:e})",
+                        h.gyr_missing_time, health_before.gyr_missing_time
+                    ));
+                }
                 initialized = true;
+                last_t = None;
                 ahrs_bits(a)?;
             } else if r < 8 {
-                // --- a batch, possibly with a non-finite entry at sample k
+                // --- a batch: untimed (quaternions only, with the spread, with the spread and
+                // the health score; each optional output sometimes NULL: not wanted) or timed
+                // (with the spread and the health score), possibly with a NaN/Inf entry at
+                // sample k, a gyroscope row turning too far, or a bad timestamp
+                let variant = rng.below(4);
+                let timed = variant == 3;
+                let with_spread = variant >= 1;
+                let with_health = variant >= 2;
                 let n = rng.below(13);
+                // the timestamps (timed): from the last one of the previous timed batch (its
+                // step the first sample's) or any origin, the steps nominal, jittered or over
+                // dropped samples, sometimes exactly uniform
+                let uniform = rng.chance(0.3);
+                let mut t = vec![0.0; n];
+                let mut prev = last_t.unwrap_or(*rng.pick(&[0.0, -5.0, 1.0, 1e3, 12345.678, 1e9]));
+                for tk in t.iter_mut() {
+                    let h = if uniform {
+                        dt
+                    } else {
+                        match rng.below(6) {
+                            0..=2 => dt,
+                            3 => dt * rng.range(0.7, 1.3),
+                            4 => dt * (2 + rng.below(4)) as f64,
+                            _ => dt * rng.range(0.2, 0.9),
+                        }
+                    };
+                    *tk = prev + h;
+                    prev = *tk;
+                }
+                // a hostile timestamp: not finite, not after the previous one, a step beyond
+                // 10 s or below 1e-6 s, or exactly 10 s (valid)
+                let mut t_desc = String::new();
+                if timed && n > 0 && rng.chance(0.25) {
+                    let k = rng.below(n);
+                    let p = if k > 0 {
+                        t[k - 1]
+                    } else {
+                        last_t.unwrap_or(t[0] - dt)
+                    };
+                    t[k] = match rng.below(8) {
+                        0 => non_finite(&mut rng),
+                        1 => p,
+                        2 => p - dt * rng.range(0.0, 3.0),
+                        3 => p + 10.0 + rng.range(1e-6, 5.0),
+                        4 => p + 1e-7 * p.abs().max(1.0),
+                        5 => p + 10.0,
+                        6 => p + 1e-6,
+                        _ => -p,
+                    };
+                    for j in k + 1..n {
+                        t[j] = t[j - 1] + dt;
+                    }
+                    t_desc = format!("t[{k}] = {:e} (previous {p:e})", t[k]);
+                }
                 let mut g = vec![0.0; 3 * n];
                 let mut ac = vec![0.0; 3 * n];
                 let mut mg = vec![0.0; 3 * n];
                 for k in 0..n {
-                    let s = imu.sample(&mut rng, dt);
+                    let h = if timed {
+                        let d = if k > 0 {
+                            t[k] - t[k - 1]
+                        } else {
+                            last_t.map_or(dt, |l| t[0] - l)
+                        };
+                        if STEP_RANGE.contains(&d) {
+                            d
+                        } else {
+                            dt
+                        }
+                    } else {
+                        dt
+                    };
+                    let s = imu.sample(&mut rng, h);
                     g[3 * k..3 * k + 3].copy_from_slice(&s[0]);
                     ac[3 * k..3 * k + 3].copy_from_slice(&s[1]);
                     mg[3 * k..3 * k + 3].copy_from_slice(&s[2]);
                 }
                 let mag_null = !use_mag;
-                // (sample, 0 gyroscope / 1 accelerometer / 2 magnetometer) with a NaN/Inf entry
+                // (sample, 0 gyroscope / 1 accelerometer / 2 magnetometer) with a NaN/Inf entry:
+                // "no sample" of that sensor, except the accelerometer of the first sample of an
+                // AHRS not yet started
                 let spoiled = (n > 0 && rng.chance(0.4))
                     .then(|| (rng.below(n), rng.below(if mag_null { 2 } else { 3 })));
-                // the sample that must stop the batch: a non-finite gyroscope entry, or a
-                // non-finite accelerometer entry in the first sample of an AHRS not yet started;
-                // NaN/Inf elsewhere in the accelerometer or magnetometer rows means "no sample"
-                let mut bad = None;
                 if let Some((k, which)) = spoiled {
                     let arr = match which {
                         0 => &mut g,
@@ -337,26 +513,73 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                         _ => &mut mg,
                     };
                     arr[3 * k + rng.below(3)] = non_finite(&mut rng);
-                    if which == 0 || (which == 1 && k == 0 && !initialized) {
-                        bad = Some(k);
+                }
+                // a huge gyroscope row: refused if it turns by more than 1e6 rad (its norm
+                // overflowing included), else used
+                let mut huge = None;
+                if n > 0 && rng.chance(0.1) {
+                    let k = rng.below(n);
+                    let v = *rng.pick(&[1e3, 1e7, 1e9, 1e12, 1e150, 1e200, f64::MAX]);
+                    g[3 * k..3 * k + 3].copy_from_slice(&[v, -v, 0.5 * v]);
+                    huge = Some((k, v));
+                }
+                // the sample that must stop the batch, in order: a bad timestamp or step, a
+                // gyroscope turning too far, the first sample without an accelerometer
+                let mut bad = None;
+                let mut uncertain = false;
+                {
+                    let mut prev_t = last_t;
+                    let mut started = initialized;
+                    for k in 0..n {
+                        let h = if timed {
+                            let d = prev_t.map_or(dt, |l| t[k] - l);
+                            if !t[k].is_finite() || d <= 0.0 || !STEP_RANGE.contains(&d) {
+                                bad = Some(k);
+                                break;
+                            }
+                            prev_t = Some(t[k]);
+                            d
+                        } else {
+                            dt
+                        };
+                        match gyro_kind(&g[3 * k..3 * k + 3], h) {
+                            Gyro::Refused => {
+                                bad = Some(k);
+                                break;
+                            }
+                            Gyro::Ambiguous => uncertain = true,
+                            _ => {}
+                        }
+                        if !started && ac[3 * k..3 * k + 3].iter().any(|v| !v.is_finite()) {
+                            bad = Some(k);
+                            break;
+                        }
+                        started = true;
                     }
                 }
-                // the three batch forms: quaternions only, with the spread, with the spread and
-                // the health score (each optional output sometimes NULL: not wanted)
-                let variant = rng.below(3);
-                let with_spread = variant >= 1;
-                let with_health = variant == 2;
                 let spread_null = with_spread && rng.chance(0.3);
                 let health_null = with_health && rng.chance(0.3);
-                let (mut bg, mut ba, mut bm) = (Buf::from(&g), Buf::from(&ac), Buf::from(&mg));
+                // overlapping inputs (valid: only read): the field read from the accelerometer's
+                // rows, one double on
+                let overlap = !mag_null && n > 0 && rng.chance(0.1);
+                let mut ac_ext = ac.clone();
+                ac_ext.push(25.0);
+                if overlap {
+                    mg = ac_ext[1..].to_vec();
+                }
+                let (mut bt, mut bg) = (Buf::from(&t), Buf::from(&g));
+                let (mut ba, mut bm) = (Buf::from(&ac_ext), Buf::from(&mg));
                 let mut bq = Buf::sentinel(4 * n);
                 let mut bs = Buf::sentinel(n);
                 let mut bh = Buf::sentinel(n);
                 let mut ap = a;
+                let mut tp = bt.ptr() as *const f64;
                 let mut gp = bg.ptr() as *const f64;
                 let mut acp = ba.ptr() as *const f64;
                 let mut mp = if mag_null {
                     std::ptr::null()
+                } else if overlap {
+                    ba.ptr().wrapping_add(1) as *const f64
                 } else {
                     bm.ptr() as *const f64
                 };
@@ -376,13 +599,14 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                 // health, so those are only misaligned
                 let mut attack = String::new();
                 if rng.chance(0.08) {
-                    let which = rng.below(if n > 0 { 7 } else { 1 });
-                    let null = which < 4 && rng.chance(0.5);
+                    let which = rng.below(if n > 0 { 8 } else { 1 });
+                    let null = (which < 4 || which == 7) && rng.chance(0.5);
                     let off = 1 + rng.below(7);
                     let passed = match which {
                         4 => !mag_null,
                         5 => with_spread && !spread_null,
                         6 => with_health && !health_null,
+                        7 => timed,
                         _ => true,
                     };
                     if passed {
@@ -397,9 +621,12 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                             (3, false) => qp = bq.misaligned(off),
                             (4, _) => mp = bm.misaligned(off),
                             (5, _) => sp = bs.misaligned(off),
-                            _ => hp = bh.misaligned(off),
+                            (6, _) => hp = bh.misaligned(off),
+                            (_, true) => tp = std::ptr::null(),
+                            _ => tp = bt.misaligned(off),
                         }
-                        let arg = ["a", "gyr", "acc", "quat", "mag", "spread", "health"][which];
+                        let arg =
+                            ["a", "gyr", "acc", "quat", "mag", "spread", "health", "t"][which];
                         attack = if null {
                             format!("{arg} NULL")
                         } else {
@@ -410,20 +637,43 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                 let name = match variant {
                     0 => "bingham_ahrs_update_batch",
                     1 => "bingham_ahrs_update_batch_spread",
-                    _ => "bingham_ahrs_update_batch_health",
+                    2 => "bingham_ahrs_update_batch_health",
+                    _ => "bingham_ahrs_update_batch_timed",
                 };
+                // uniformly spaced timestamps: the timed batch is the untimed one, bit for bit
+                // (an untimed batch on a clone compares). Not where a step rounds below 1e-6 s
+                // (sample_time = 1e-6): the library checks the step's range before it takes a
+                // step within a millionth of sample_time as sample_time, and refuses it
+                // (reported, not fixed here).
+                let comparable = timed
+                    && attack.is_empty()
+                    && t_desc.is_empty()
+                    && (0..n).all(|k| {
+                        let d = if k > 0 {
+                            t[k] - t[k - 1]
+                        } else {
+                            last_t.map_or(dt, |l| t[0] - l)
+                        };
+                        (d - dt).abs() <= 1e-7 * dt && STEP_RANGE.contains(&d)
+                    });
+                let mut plain: *mut bingham_ahrs = std::ptr::null_mut();
+                if comparable && unsafe { bingham_ahrs_clone(a, &mut plain) } != BINGHAM_OK {
+                    return Err(format!("clone: {}", last_error()));
+                }
                 prime_last_error(name);
                 let st = unsafe {
                     match variant {
                         0 => bingham_ahrs_update_batch(ap, n, gp, acp, mp, qp),
                         1 => bingham_ahrs_update_batch_spread(ap, n, gp, acp, mp, qp, sp),
-                        _ => bingham_ahrs_update_batch_health(ap, n, gp, acp, mp, qp, sp, hp),
+                        2 => bingham_ahrs_update_batch_health(ap, n, gp, acp, mp, qp, sp, hp),
+                        _ => bingham_ahrs_update_batch_timed(ap, n, tp, gp, acp, mp, qp, sp, hp),
                     }
                 };
                 calls += 1;
                 if verbose {
                     eprintln!(
-                        "step {step}: {name} n = {n}, spoiled {spoiled:?}, bad {bad:?} {attack} -> {}",
+                        "step {step}: {name} n = {n}, spoiled {spoiled:?}, huge {huge:?}, {t_desc} \
+                         t {t:?}, overlap {overlap}, bad {bad:?} {attack} -> {}",
                         status_name(st)
                     );
                 }
@@ -437,7 +687,11 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                             .zip(v)
                             .all(|(x, y)| x.to_bits() == y.to_bits())
                 };
-                if !inputs_kept(&bg, &g) || !inputs_kept(&ba, &ac) || !inputs_kept(&bm, &mg) {
+                if !inputs_kept(&bt, &t)
+                    || !inputs_kept(&bg, &g)
+                    || !inputs_kept(&ba, &ac_ext)
+                    || !inputs_kept(&bm, &mg)
+                {
                     return Err(format!("{name} modified an input"));
                 }
                 if !attack.is_empty() {
@@ -455,11 +709,13 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                     }
                     return Ok(());
                 }
-                expect(
-                    st,
-                    bad.map(|_| BINGHAM_ERR_INVALID_ARGUMENT),
-                    &format!("bad sample {bad:?}"),
-                )?;
+                if !uncertain {
+                    expect(
+                        st,
+                        bad.map(|_| BINGHAM_ERR_INVALID_ARGUMENT),
+                        &format!("bad sample {bad:?} ({t_desc})"),
+                    )?;
+                }
                 // how many samples were processed
                 let done = if st == BINGHAM_OK {
                     n
@@ -472,16 +728,16 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                         .and_then(|t| t.split(|c: char| !c.is_ascii_digit()).next())
                         .and_then(|t| t.parse::<usize>().ok())
                         .ok_or_else(|| format!("message does not name the sample: {msg}"))?;
-                    if bad.is_some_and(|b| b != k) || k >= n {
+                    if (!uncertain && bad.is_some_and(|b| b != k)) || k >= n {
                         return Err(format!(
                             "stopped at sample {k}, the bad one is {bad:?}: {msg}"
                         ));
                     }
                     // only the bad sample may stop a batch of simulated samples (a missing
-                    // accelerometer or magnetometer does not)
-                    if bad.is_none() && valid_dt && dt <= 0.1 {
+                    // gyroscope, accelerometer or magnetometer does not)
+                    if bad.is_none() && !uncertain && valid_dt && dt <= 0.1 {
                         return Err(format!(
-                            "a batch stopped at sample {k} (spoiled {spoiled:?}): {msg}"
+                            "a batch stopped at sample {k} (spoiled {spoiled:?}, huge {huge:?}): {msg}"
                         ));
                     }
                     k
@@ -515,20 +771,67 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                         return Err(format!("{what} written from the refused sample on"));
                     }
                 }
-                // the twin replays the processed samples one by one: the same quaternion, total
-                // spread and health score after each
-                for k in 0..done {
-                    let st = unsafe {
-                        bingham_ahrs_update(
-                            twin,
-                            g[3 * k..].as_ptr(),
-                            ac[3 * k..].as_ptr(),
+                // uniform timestamps: the untimed batch on the clone gives the same
+                if !plain.is_null() {
+                    let mut q2 = vec![0.0; 4 * n];
+                    let (mut s2, mut h2) = (vec![0.0; n], vec![0.0; n]);
+                    let st2 = unsafe {
+                        bingham_ahrs_update_batch_health(
+                            plain,
+                            n,
+                            g.as_ptr(),
+                            ac.as_ptr(),
                             if mag_null {
                                 std::ptr::null()
                             } else {
-                                mg[3 * k..].as_ptr()
+                                mg.as_ptr()
                             },
+                            q2.as_mut_ptr(),
+                            s2.as_mut_ptr(),
+                            h2.as_mut_ptr(),
                         )
+                    };
+                    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    let same = st2 == st
+                        && bits(&q[..4 * done]) == bits(&q2[..4 * done])
+                        && (spread_null || bits(&s[..done]) == bits(&s2[..done]))
+                        && (health_null || bits(&h[..done]) == bits(&h2[..done]))
+                        && ahrs_bits(plain)? == ahrs_bits(a)?;
+                    unsafe { bingham_ahrs_free(plain) };
+                    if !same {
+                        return Err(format!(
+                            "timed batch with uniform timestamps differs from the untimed one ({} vs {})",
+                            status_name(st),
+                            status_name(st2)
+                        ));
+                    }
+                }
+                // the twin replays the processed samples one by one (a timed batch as batches of
+                // one sample: split anywhere, the same): the same quaternion, total spread and
+                // health score after each
+                for k in 0..done {
+                    let mp = if mag_null {
+                        std::ptr::null()
+                    } else {
+                        mg[3 * k..].as_ptr()
+                    };
+                    let st = unsafe {
+                        if timed {
+                            let mut one = [0.0; 4];
+                            bingham_ahrs_update_batch_timed(
+                                twin,
+                                1,
+                                t[k..].as_ptr(),
+                                g[3 * k..].as_ptr(),
+                                ac[3 * k..].as_ptr(),
+                                mp,
+                                one.as_mut_ptr(),
+                                std::ptr::null_mut(),
+                                std::ptr::null_mut(),
+                            )
+                        } else {
+                            bingham_ahrs_update(twin, g[3 * k..].as_ptr(), ac[3 * k..].as_ptr(), mp)
+                        }
                     };
                     if st != BINGHAM_OK {
                         return Err(format!(
@@ -537,17 +840,16 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                         ));
                     }
                     let (mut tq, mut ts) = ([0.0; 4], [0.0; 4]);
-                    let mut th: bingham_ahrs_health_report = unsafe { std::mem::zeroed() };
                     let sts = unsafe {
                         [
                             bingham_ahrs_quaternion(twin, tq.as_mut_ptr()),
                             bingham_ahrs_angular_spread(twin, ts.as_mut_ptr()),
-                            bingham_ahrs_health(twin, &mut th),
                         ]
                     };
                     if sts.iter().any(|&st| st != BINGHAM_OK) {
                         return Err(format!("twin getters: {}", last_error()));
                     }
+                    let th = ahrs_health(twin)?;
                     let same = |x: &[f64], y: &[f64]| {
                         x.iter().zip(y).all(|(a, b)| a.to_bits() == b.to_bits())
                     };
@@ -574,9 +876,12 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                     return Err("a batch refused at sample 0 changed the AHRS".into());
                 }
                 initialized |= done > 0;
+                if done > 0 {
+                    last_t = if timed { Some(t[done - 1]) } else { None };
+                }
             } else if r < 9 {
                 // --- getters with NULL / misaligned arguments
-                let which = rng.below(7);
+                let which = rng.below(8);
                 let null_handle = rng.chance(0.5);
                 let mut buf = Buf::sentinel(16);
                 let mut buf2 = Buf::sentinel(4);
@@ -606,6 +911,10 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                             bingham_ahrs_mag_latency_estimate(ap, o1),
                         ),
                         5 => ("bingham_ahrs_health", bingham_ahrs_health(ap, o1.cast())),
+                        6 => (
+                            "bingham_ahrs_orientation_covariance",
+                            bingham_ahrs_orientation_covariance(ap, o1),
+                        ),
                         _ => (
                             "bingham_ahrs_angular_spread",
                             bingham_ahrs_angular_spread(ap, o1),
@@ -745,6 +1054,34 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
         bingham_ahrs_free(std::ptr::null_mut());
     }
     result.map(|()| calls)
+}
+
+/// A sample's own time step for `bingham_ahrs_update_dt` (`dt` the nominal period): mostly the
+/// nominal period, jittered or spanning dropped samples, sometimes the bounds of the valid
+/// range, or hostile (0, negative, NaN/Inf, below 1e-6 s, above 10 s, subnormal, huge).
+fn pick_step(rng: &mut Rng64, dt: f64) -> f64 {
+    match rng.below(10) {
+        0..=3 => dt,
+        4 => dt * rng.range(0.7, 1.3),
+        5 => dt * (2 + rng.below(5)) as f64,
+        6 => *rng.pick(&[1e-6, 10.0, 0.5, 2.5, dt * (1.0 + 1e-9)]),
+        _ => *rng.pick(&[
+            0.0,
+            -0.0,
+            -dt,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            1e-7,
+            9.99e-7,
+            10.000001,
+            11.0,
+            1e300,
+            5e-324,
+            -1e-300,
+            f64::MAX,
+        ]),
+    }
 }
 
 #[test]

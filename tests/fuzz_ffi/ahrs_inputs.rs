@@ -19,13 +19,66 @@ pub(crate) fn ahrs_sentinel() -> *mut bingham_ahrs {
     0xDEAD_BEE0usize as *mut bingham_ahrs
 }
 
+/// The largest turn (rad) of one gyroscope sample, `|gyr|·dt`, beyond which the sample is
+/// refused (not a rate).
+pub(crate) const MAX_TURN: f64 = 1e6;
+
+/// The range of a sample's time step (s): `BINGHAM_AHRS_MIN_SAMPLE_TIME` to
+/// `BINGHAM_AHRS_MAX_STEP_TIME`.
+pub(crate) const STEP_RANGE: std::ops::RangeInclusive<f64> = 1e-6..=10.0;
+
+/// What the AHRS makes of a gyroscope sample taken `h` seconds after the previous one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Gyro {
+    /// a rate, used
+    Usable,
+    /// "no gyroscope sample" (a gap the AHRS carries the orientation through): a NaN/±Inf
+    /// entry
+    Gap,
+    /// refused: finite, turning by more than [`MAX_TURN`] rad in `h` (entries so large that
+    /// the vector's norm overflows included)
+    Refused,
+    /// within rounding of the limit (the library's step may be `h` snapped to the nominal
+    /// period): either
+    Ambiguous,
+}
+
+pub(crate) fn gyro_kind(g: &[f64], h: f64) -> Gyro {
+    let n = (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt();
+    if g.iter().any(|v| !v.is_finite()) {
+        return Gyro::Gap;
+    }
+    let turn = n * h;
+    if (turn - MAX_TURN).abs() <= 1e-5 * MAX_TURN {
+        Gyro::Ambiguous
+    } else if !turn.is_finite() || turn > MAX_TURN {
+        Gyro::Refused
+    } else {
+        Gyro::Usable
+    }
+}
+
+/// The health readout (`bingham_ahrs_health`).
+pub(crate) fn ahrs_health(a: *const bingham_ahrs) -> Result<bingham_ahrs_health_report, String> {
+    // SAFETY: a plain struct of numbers; a is live.
+    let mut h: bingham_ahrs_health_report = unsafe { std::mem::zeroed() };
+    let st = unsafe { bingham_ahrs_health(a, &mut h) };
+    if st != BINGHAM_OK {
+        return Err(format!("bingham_ahrs_health: {}", last_error()));
+    }
+    Ok(h)
+}
+
 /// Everything the getters show, as bits: q (4), M (16), z (4), bias (3), spread (4), the bias
-/// covariance (9: finite, symmetric to 1e-12 of its largest variance, diagonal ≥ 0), and the
-/// magnetometer latency estimate (status, value: OK with a finite value ≥ 0, or NOT_CONVERGED
-/// with the output untouched).
+/// covariance (9: finite, symmetric to 1e-12 of its largest variance, diagonal ≥ 0), the
+/// orientation covariance (9: finite, symmetric to 1e-14 of its trace, diagonal ≥ 0, 2×2
+/// principal minors ≥ 0 up to rounding, the trace the square of the total spread,
+/// within 1e-12 relative), the health readout (its 11 doubles, finite, the missing times ≥ 0, and the
+/// reference flag), and the magnetometer latency estimate (status, value: OK with a finite
+/// value ≥ 0, or NOT_CONVERGED with the output untouched).
 pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
     let (mut q, mut m, mut z, mut b, mut s) = ([0.0; 4], [0.0; 16], [0.0; 4], [0.0; 3], [0.0; 4]);
-    let mut c = [0.0; 9];
+    let (mut c, mut oc) = ([0.0; 9], [0.0; 9]);
     // SAFETY: a is live; buffers of the documented lengths.
     let sts = unsafe {
         [
@@ -33,6 +86,7 @@ pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
             bingham_ahrs_state(a, m.as_mut_ptr(), z.as_mut_ptr()),
             bingham_ahrs_gyro_bias(a, b.as_mut_ptr()),
             bingham_ahrs_gyro_bias_covariance(a, c.as_mut_ptr()),
+            bingham_ahrs_orientation_covariance(a, oc.as_mut_ptr()),
         ]
     };
     if sts.iter().any(|&st| st != BINGHAM_OK) {
@@ -77,15 +131,62 @@ pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
             "bias covariance {c:?} (scale {scale:e}): not finite, symmetric, diagonal ≥ 0"
         ));
     }
+    // The header states trace == spread[3]² (to rounding): both take the pending process
+    // noise's positive semi-definite part, also after a step with strong coupling (fast
+    // rotation, a step of seconds), where that noise has negative parts.
+    let tr = oc[0] + oc[4] + oc[8];
+    let s2 = s[3] * s[3];
+    let asymmetric =
+        (0..3).any(|i| (0..3).any(|j| (oc[3 * i + j] - oc[3 * j + i]).abs() > 1e-14 * tr));
+    let minors_ok = (0..3).all(|i| {
+        let j = (i + 1) % 3;
+        oc[4 * i] * oc[4 * j] - oc[3 * i + j] * oc[3 * j + i] >= -1e-13 * tr * tr
+    });
+    if oc.iter().any(|v| !v.is_finite())
+        || (0..3).any(|i| oc[4 * i] < 0.0)
+        || asymmetric
+        || !minors_ok
+        || (s2 - tr).abs() > 1e-12 * tr
+    {
+        return Err(format!(
+            "orientation covariance {oc:?} (trace {tr:e}, spread² {s2:e}): not finite, \
+             symmetric, positive semi-definite with the trace the squared total spread"
+        ));
+    }
+    let h = ahrs_health(a)?;
+    let hv = [
+        h.score,
+        h.gravity_score,
+        h.tilt_score,
+        h.heading_score,
+        h.tilt_innovation,
+        h.heading_innovation,
+        h.mag_rejected,
+        h.mag_dip,
+        h.gyr_missing_time,
+        h.acc_missing_time,
+        h.mag_missing_time,
+    ];
+    if hv.iter().any(|v| !v.is_finite())
+        || hv[8..].iter().any(|&v| v < 0.0)
+        || !(h.has_mag_reference == 0 || h.has_mag_reference == 1)
+    {
+        return Err(format!(
+            "health readout {hv:?}, reference {}",
+            h.has_mag_reference
+        ));
+    }
     Ok(q.iter()
         .chain(&m)
         .chain(&z)
         .chain(&b)
         .chain(&s)
         .chain(&c)
+        .chain(&oc)
+        .chain(&hv)
         .chain(&l)
         .map(|v| v.to_bits())
-        .chain([st as u64])
+        .chain([st as u64, h.has_mag_reference as u64])
         .collect())
 }
 
@@ -128,8 +229,9 @@ impl Imu {
 }
 
 /// Spoils one entry or vector of a sample (0 gyroscope, 1 accelerometer, 2 magnetometer);
-/// returns the vector made non-finite, if any (the gyroscope's must be refused; the others mean
-/// "no sample" of that sensor, except the accelerometer of the first sample).
+/// returns the vector made non-finite, if any (each means "no sample" of that sensor, except
+/// the accelerometer of the first sample, which is refused; a finite gyroscope is refused when
+/// it turns by more than [`MAX_TURN`] rad in the sample, see [`gyro_kind`]).
 pub(crate) fn spoil_sample(rng: &mut Rng64, s: &mut [[f64; 3]; 3]) -> (Option<usize>, String) {
     let v = rng.below(3);
     match rng.below(4) {
