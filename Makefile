@@ -127,14 +127,12 @@ broad: venv
 # is named in exactly one of the lists below; `make tiers` (the first step of `quick`) fails
 # otherwise, so a new test file cannot escape both tiers.
 
-# The API coverage test (every export against its mirrors) is written on another branch: named
-# here, run in the quick tier once tests/api_mirrors.rs exists.
-API_MIRRORS := $(if $(wildcard tests/api_mirrors.rs),api_mirrors)
-# Run first in the quick tier: the header drift check and the API coverage test.
-API_TESTS := header $(API_MIRRORS)
+# Run first in the quick tier: the header drift check, the API coverage test (every export
+# against its mirrors) and the documented paths and versions.
+API_TESTS := header api_mirrors doc_paths
 # The quick tier's other binaries (with the library's unit tests, `--lib`), then the C/C++
 # programs (c_tests, last: it compiles C++ with Eigen when its sources or headers changed).
-UNIT_TESTS := ahrs ahrs_latency deterministic dispatch distribution filter filter_alloc \
+UNIT_TESTS := ahrs ahrs_latency ahrs_timing deterministic dispatch distribution filter filter_alloc \
               filter_health general_d layering mle nonlinear normalization observation q4 \
               saddlepoint special speed_figures spin threads world
 C_TESTS := c_tests
