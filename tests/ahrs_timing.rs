@@ -11,7 +11,7 @@ const DT: f64 = 0.01;
 
 /// A smooth stream: rotation about a wandering axis, gravity and a 60°-dip field in the
 /// sensor frame turned by the integrated rate (exact enough for agreement tests).
-fn stream(n: usize) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[f64; 3]>) {
+fn stream(n: usize) -> (Rows3, Rows3, Rows3) {
     let (g, a, m, _) = stream_with_truth(n);
     (g, a, m)
 }
