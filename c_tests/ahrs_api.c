@@ -1107,7 +1107,12 @@ static void test_ahrs_bias_uncertainty(void) {
         for (int which = 0; which < 3; ++which) {
             for (int r = 1; r <= 3; ++r, ++k) {
                 sample(k, g, acc, mag);
-                (which == 0 ? g : which == 1 ? acc : mag)[r - 1] = NAN;
+                if (which == 0)
+                    g[r - 1] = NAN;
+                else if (which == 1)
+                    acc[r - 1] = NAN;
+                else
+                    mag[r - 1] = NAN;
                 CHECK_OK(bingham_ahrs_update(a, g, acc, mag));
                 bingham_ahrs_health_report h;
                 hsnap(a, &h);
