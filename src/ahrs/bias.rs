@@ -109,6 +109,13 @@ impl BiasState {
         self.c *= ik.transpose();
     }
 
+    /// Forgets the coupling of the bias to the orientation error (`C = 0`): what a correction
+    /// that did not teach the bias taught the orientation must not reach the bias through the
+    /// next corrections (module `ahrs`, the recovery rule).
+    pub(super) fn decouple(&mut self) {
+        self.c = Matrix3::zeros();
+    }
+
     /// The estimate clipped to `±max` per axis.
     pub(super) fn clip(&mut self, max: f64) {
         for v in self.b.iter_mut() {
@@ -138,15 +145,26 @@ pub(super) fn psd(a: &Matrix3<f64>) -> Matrix3<f64> {
 /// (Laplace: `Λ = Σ_i (−z_i/2) u_i u_iᵀ`).
 pub(super) fn precision(m: &Matrix4<f64>, z: &Vector4<f64>) -> Matrix3<f64> {
     let mode = m.column(3);
-    let qc = q4::conj(&[mode[0], mode[1], mode[2], mode[3]]);
     let mut lam = Matrix3::zeros();
-    for i in 0..3 {
-        let c = m.column(i);
-        let v = q4::mul(&qc, &[c[0], c[1], c[2], c[3]]);
-        let u = Vector3::new(v[1], v[2], v[3]);
+    for (i, u) in principal_directions(m, &[mode[0], mode[1], mode[2], mode[3]])
+        .iter()
+        .enumerate()
+    {
         lam += u * u.transpose() * (-(z[i] - z[3]) / 2.0).max(0.0);
     }
     lam
+}
+
+/// The body-frame directions of the first three columns of `m` at the orientation `q` (the
+/// mode): `u_i` the vector part of `q* ⊗ m_i`, orthonormal when `m` is orthogonal and `q` its
+/// last column.
+pub(super) fn principal_directions(m: &Matrix4<f64>, q: &[f64; 4]) -> [Vector3<f64>; 3] {
+    let qc = q4::conj(q);
+    std::array::from_fn(|i| {
+        let c = m.column(i);
+        let v = q4::mul(&qc, &[c[0], c[1], c[2], c[3]]);
+        Vector3::new(v[1], v[2], v[3])
+    })
 }
 
 /// The body-frame precision `H` that the likelihood `exp(qᵀ E q)` puts on the orientation

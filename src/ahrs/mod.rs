@@ -308,13 +308,9 @@ impl Ahrs {
         if n.trace() > 0.0 {
             let core = f.core4()?;
             let (m, _) = core.params();
-            let q = core.mode();
-            let qc = q4::conj(&q);
+            let dirs = bias::principal_directions(m, &core.mode());
             let mut total = out[3] * out[3];
-            for (i, o) in out.iter_mut().take(3).enumerate() {
-                let c = m.column(i);
-                let v = q4::mul(&qc, &[c[0], c[1], c[2], c[3]]);
-                let u = Vector3::new(v[1], v[2], v[3]);
+            for (o, u) in out.iter_mut().take(3).zip(&dirs) {
                 let add = (u.transpose() * n * u)[0].max(0.0);
                 *o = (*o * *o + add).sqrt();
                 total += add;
@@ -344,12 +340,11 @@ impl Ahrs {
                 let core = f.core4()?;
                 let (m, _) = core.params();
                 let q = core.mode();
-                let qc = q4::conj(&q);
-                for i in 0..3 {
-                    let c = m.column(i);
-                    let v = q4::mul(&qc, &[c[0], c[1], c[2], c[3]]);
-                    let u = Vector3::new(v[1], v[2], v[3]);
-                    body += u * u.transpose() * (4.0 * self.sample_state.omega[i].max(0.0));
+                for (u, w) in bias::principal_directions(m, &q)
+                    .iter()
+                    .zip(&self.sample_state.omega)
+                {
+                    body += u * u.transpose() * (4.0 * w.max(0.0));
                 }
                 body += bias::psd(&self.sample_state.bias.pending);
                 q
@@ -1024,7 +1019,7 @@ fn correct(p: &AhrsParams, core: &mut Core<4>, s: &mut SampleState) -> Result<()
         // what the recovery taught the orientation is not evidence about the bias: the
         // coupling starts afresh, so that the next correction does not read the recovery's
         // moves as the effect of a bias
-        s.bias.c = Matrix3::zeros();
+        s.bias.decouple();
     }
     s.bias.clip(p.bias_max);
 

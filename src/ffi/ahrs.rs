@@ -189,15 +189,34 @@ pub unsafe extern "C" fn bingham_ahrs_update(
     mag: *const f64,
 ) -> bingham_status {
     guard("bingham_ahrs_update", || {
-        // SAFETY: caller contract.
-        let ahrs = unsafe { handle_mut("a", a)? };
-        // SAFETY: caller contract; 3 doubles each. NaN/Inf in any of them means "no sample"
-        // of that sensor (the core decides).
-        let (g, ac, m) = unsafe { args!(gyr: raw [3], acc: raw [3], mag: opt raw [3]).read()? };
-        let m = m.map(vec3);
-        ahrs.inner.update(&vec3(g), &vec3(ac), m.as_ref())?;
-        Ok(())
+        // SAFETY: forwarded caller contract.
+        unsafe { one_sample(a, None, gyr, acc, mag) }
     })
+}
+
+/// Shared body of `bingham_ahrs_update` (`dt` `None`: the nominal period) and
+/// `bingham_ahrs_update_dt`.
+///
+/// # Safety
+/// The callers' contract.
+unsafe fn one_sample(
+    a: *mut bingham_ahrs,
+    dt: Option<f64>,
+    gyr: *const f64,
+    acc: *const f64,
+    mag: *const f64,
+) -> FfiResult<()> {
+    // SAFETY: caller contract.
+    let ahrs = unsafe { handle_mut("a", a)? };
+    // SAFETY: caller contract; 3 doubles each. NaN/Inf in any of them means "no sample" of that
+    // sensor (the core decides).
+    let (g, ac, m) = unsafe { args!(gyr: raw [3], acc: raw [3], mag: opt raw [3]).read()? };
+    let m = m.map(vec3);
+    match dt {
+        None => ahrs.inner.update(&vec3(g), &vec3(ac), m.as_ref())?,
+        Some(dt) => ahrs.inner.update_dt(dt, &vec3(g), &vec3(ac), m.as_ref())?,
+    }
+    Ok(())
 }
 
 /// Processes one sample taken `dt` seconds after the previous one (its own time step: jitter,
@@ -225,13 +244,8 @@ pub unsafe extern "C" fn bingham_ahrs_update_dt(
     mag: *const f64,
 ) -> bingham_status {
     guard("bingham_ahrs_update_dt", || {
-        // SAFETY: caller contract.
-        let ahrs = unsafe { handle_mut("a", a)? };
-        // SAFETY: caller contract; 3 doubles each (NaN/Inf: "no sample" of that sensor).
-        let (g, ac, m) = unsafe { args!(gyr: raw [3], acc: raw [3], mag: opt raw [3]).read()? };
-        let m = m.map(vec3);
-        ahrs.inner.update_dt(dt, &vec3(g), &vec3(ac), m.as_ref())?;
-        Ok(())
+        // SAFETY: forwarded caller contract.
+        unsafe { one_sample(a, Some(dt), gyr, acc, mag) }
     })
 }
 
