@@ -107,23 +107,51 @@ pub struct AhrsHealth {
 /// An exponential average with its start-up bias removed (the mean of the values seen so far,
 /// weighted towards the recent ones).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-struct Average {
+pub(super) struct Average {
     sum: f64,
     weight: f64,
 }
 
 impl Average {
-    fn push(&mut self, x: f64, alpha: f64) {
+    /// Adds `x` with the weight `alpha` (0 to 1) relative to the past.
+    pub(super) fn push(&mut self, x: f64, alpha: f64) {
         self.sum += alpha * (x - self.sum);
         self.weight += alpha * (1.0 - self.weight);
     }
 
-    fn value(&self) -> f64 {
+    /// Whether a value has been pushed.
+    pub(super) fn is_empty(&self) -> bool {
+        self.weight <= 0.0
+    }
+
+    /// The average (0 before the first value).
+    pub(super) fn value(&self) -> f64 {
         if self.weight > 0.0 {
             self.sum / self.weight
         } else {
             0.0
         }
+    }
+}
+
+/// The normalized innovations of one correction, per degree of freedom (`None` for a sensor
+/// that gave no evidence).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(super) struct Innovations {
+    /// The tilt's `ν_a / 2`.
+    pub(super) tilt: Option<f64>,
+    /// The heading's `ν_m`.
+    pub(super) heading: Option<f64>,
+    /// The tilt's `ν_a / 2` over its mean if the model held ([`expected_nis`]).
+    pub(super) tilt_scale: Option<f64>,
+    /// The heading's `ν_m` over its mean if the model held.
+    pub(super) heading_scale: Option<f64>,
+}
+
+impl Innovations {
+    /// The largest of the two (0 without an observation).
+    pub(super) fn largest(&self) -> f64 {
+        self.tilt.unwrap_or(0.0).max(self.heading.unwrap_or(0.0))
     }
 }
 
@@ -150,7 +178,7 @@ impl HealthState {
     /// the predicted body-frame up `b_hat` (unit), the observed one `b` (unit) with its
     /// angular variance `var_a` (rad², or `None` without a tilt observation), and the heading
     /// error `delta` (rad) with its variance `var_m` (or `None`). Returns the correction's
-    /// largest normalized innovation per degree of freedom (0 without an observation).
+    /// normalized innovations per degree of freedom (module `uncertainty` averages them).
     pub(super) fn correction(
         &mut self,
         t: f64,
@@ -159,15 +187,15 @@ impl HealthState {
         tilt: Option<(&[f64; 3], f64)>,
         heading: Option<(f64, f64)>,
         gravity_excess: Option<f64>,
-    ) -> f64 {
+    ) -> Innovations {
         let alpha = (t / HEALTH_TIME).min(1.0);
         if let Some(x) = gravity_excess {
             self.gravity.push(x * x, alpha);
         }
+        let mut out = Innovations::default();
         if tilt.is_none() && heading.is_none() {
-            return 0.0;
+            return out;
         }
-        let mut largest = 0.0f64;
         // The state's covariance (rad², body frame; see `covariance`).
         let sigma = covariance(lam);
         let bh = Vector3::from(*b_hat);
@@ -184,16 +212,20 @@ impl HealthState {
             };
             let nis = tilt_nis(&sigma, &bh, &e, var_a);
             self.tilt.push(nis / 2.0, alpha);
-            largest = largest.max(nis / 2.0);
+            out.tilt = Some(nis / 2.0);
+            let p_tilt = 0.5 * (sigma.trace() - (bh.transpose() * sigma * bh)[0]).max(0.0);
+            out.tilt_scale = Some(nis / 2.0 / expected_nis(p_tilt, var_a));
             self.tilt_innovation = angle;
         }
         if let Some((delta, var_m)) = heading {
             let var = (bh.transpose() * sigma * bh)[0].max(0.0) + var_m;
             self.heading.push(delta * delta / var, alpha);
             self.heading_innovation = delta;
-            largest = largest.max(delta * delta / var);
+            out.heading = Some(delta * delta / var);
+            let p_heading = var - var_m;
+            out.heading_scale = Some(delta * delta / var / expected_nis(p_heading, var_m));
         }
-        largest
+        out
     }
 
     /// The readout, with the reference dip `dip_above` (rad above the horizon, as the
@@ -218,6 +250,25 @@ impl HealthState {
             acc_missing_time: times.acc_missing,
             mag_missing_time: times.mag_missing,
         }
+    }
+}
+
+/// The mean of a normalized innovation `ν = δ²/(P + r)` per degree of freedom when the model
+/// holds, for a state of variance `P` observed through a low-passed measurement of variance
+/// `r`: `(P² + r²)/(P + r)²`, between 1/2 (`P = r`) and 1. The health readout divides by
+/// `P + r` as if the state's and the measurement's errors were independent; they are not. The
+/// measurement's error is correlated over its low-pass time constant `τ`, over which the state
+/// has followed the same measurement: with the evidence worth `1/(rτ)` per second, the state's
+/// error `ε` is driven by the measurement's error `v` through the gain `K = P/(rτ)`, and in the
+/// steady state `Cov(ε, v) = −K r/(K + 1/τ) = −P r/(P + r)`, so that the innovation
+/// `v − ε`... has the variance `P + r + 2 Cov(ε, v) = (P² + r²)/(P + r)` (module `uncertainty`
+/// divides by this to read the noise scale from the innovations).
+pub(super) fn expected_nis(p: f64, r: f64) -> f64 {
+    let t = p + r;
+    if t > 0.0 {
+        ((p * p + r * r) / (t * t)).clamp(0.5, 1.0)
+    } else {
+        1.0
     }
 }
 

@@ -28,6 +28,7 @@ use nalgebra::Matrix4;
 
 use super::lowpass::{Coeffs, InertialLowPass};
 use super::params::AhrsParams;
+use super::uncertainty::Inhomogeneity;
 use super::vec3::{dot3, norm3};
 use crate::quaternion::q4;
 
@@ -56,6 +57,8 @@ pub(super) struct Magnetic {
     /// The field in the world frame of the estimate, low-passed (`None` until the first
     /// sample of an undisturbed phase).
     lp: Option<InertialLowPass>,
+    /// The variation of the used samples' norm and dip (module `uncertainty`).
+    inhomogeneity: Inhomogeneity,
 }
 
 impl Magnetic {
@@ -68,7 +71,20 @@ impl Magnetic {
             disturbed: false,
             clean_time: 0.0,
             lp: None,
+            inhomogeneity: Inhomogeneity::default(),
         }
+    }
+
+    /// The variance (rad²) of the heading reference's error: the field's directional variance
+    /// from the norm's and the dip's deviations, over `cos²(dip)` (module `uncertainty`); 0
+    /// without a reference.
+    pub(super) fn heading_reference_variance(&self) -> f64 {
+        let Some((_, dip)) = self.reference else {
+            return 0.0;
+        };
+        let c = dip.cos();
+        // a field within 5° of the vertical gives no heading (heading_error): cap the factor
+        self.inhomogeneity.variance() / (c * c).max(0.0076)
     }
 
     /// Whether a reference exists and the current phase is undisturbed.
@@ -148,6 +164,7 @@ impl Magnetic {
         }
         let k = c.mag_ref;
         self.reference = Some((rn + k * (norm - rn), rd + k * (dip - rd)));
+        self.inhomogeneity.push(raw_norm, raw_dip, h);
         let mw = q4::rotate(q, m);
         match self.lp.as_mut() {
             Some(lp) => (0..repeat).for_each(|_| lp.step(&mw)),

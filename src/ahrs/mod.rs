@@ -72,6 +72,7 @@ mod magnetic;
 mod params;
 mod rest;
 mod timing;
+mod uncertainty;
 mod vec3;
 
 use bias::{evidence_precision, noise_moment, pinv, precision, BiasState};
@@ -87,6 +88,7 @@ pub use params::{
 };
 use rest::RestWindow;
 use timing::{GyroHold, SensorTimes};
+use uncertainty::Calibration;
 use vec3::{cross3, norm3, scale3};
 
 /// The largest rotation (rad) one gyroscope sample may turn (`|gyr|·sample_time`): a million
@@ -150,6 +152,12 @@ struct SampleState {
     omega: [f64; 4],
     /// The running state of the health readout.
     health: HealthState,
+    /// The innovations' averages that scale the stated covariance (module `uncertainty`).
+    calib: Calibration,
+    /// The variance (rad² per axis) that gyroscope gaps and dropped samples have added and the
+    /// corrections have not yet taken out: physical, so the stated covariance carries it
+    /// unscaled (module `uncertainty`).
+    gap_stated: f64,
 }
 
 /// The AHRS. Create it with [`Ahrs::new`], feed it samples with [`Ahrs::update`] (or
@@ -199,6 +207,8 @@ impl Ahrs {
                 restart_mag: false,
                 omega: [0.25; 4],
                 health: HealthState::default(),
+                calib: Calibration::default(),
+                gap_stated: 0.0,
             },
             latency: LatencyEstimator::new(params.sample_time),
             samples: 0,
@@ -290,33 +300,22 @@ impl Ahrs {
         self.filter.as_ref()
     }
 
-    /// The angular spread of the state (radians, see
-    /// [`crate::observation::spread_from_omega`]): `out[0..3]` along the principal directions,
-    /// `out[3]` the total (≈ the RMS rotation angle between the truth and the estimate, if the
-    /// state is calibrated), including the process noise accumulated since the last
-    /// correction and what the gyroscope bias's uncertainty has added. Before the first
-    /// sample: that of the uniform distribution.
+    /// The angular spread of the state (radians): `out[0..3]` the standard deviations along
+    /// the state's principal directions, `out[3]` the total (≈ the RMS rotation angle between
+    /// the truth and the estimate), the square roots of the variances of
+    /// [`Ahrs::orientation_covariance`] along those directions and of its trace: the state's
+    /// own spread with the process noise accumulated since the last correction, scaled by
+    /// what the innovations show and widened by the heading reference's error (module
+    /// `uncertainty`). Before the first sample: that of the uniform distribution.
     pub fn angular_spread(&self, out: &mut [f64; 4]) -> Result<()> {
-        let Some(f) = &self.filter else {
+        let Some((_, v)) = self.stated_covariance()? else {
             crate::observation::spread_from_omega(&[0.25; 4], out);
             return Ok(());
         };
-        crate::observation::spread_from_omega(&self.sample_state.omega, out);
-        // the pending noise made positive semi-definite, as the next correction and the
-        // orientation covariance take it (the two readouts then agree: trace = spread²)
-        let n = &bias::psd(&self.sample_state.bias.pending);
-        if n.trace() > 0.0 {
-            let core = f.core4()?;
-            let (m, _) = core.params();
-            let dirs = bias::principal_directions(m, &core.mode());
-            let mut total = out[3] * out[3];
-            for (o, u) in out.iter_mut().take(3).zip(&dirs) {
-                let add = (u.transpose() * n * u)[0].max(0.0);
-                *o = (*o * *o + add).sqrt();
-                total += add;
-            }
-            out[3] = total.sqrt();
+        for (o, x) in out.iter_mut().zip(&v) {
+            *o = x.sqrt();
         }
+        out[3] = (v[0] + v[1] + v[2]).sqrt();
         Ok(())
     }
 
@@ -324,35 +323,18 @@ impl Ahrs {
     /// the world frame (ENU): `q_true = exp(φ/2) ⊗ q̂` (`φ` about the world's x east, y north,
     /// z up; `q̂` [`Ahrs::quaternion`]), what `sensor_msgs/Imu.orientation_covariance` holds
     /// for an orientation of the IMU in an ENU world (REP 103). From the state's second
-    /// moments (`4 Σ ω_i u_i u_iᵀ`, `u_i` the principal directions at the mode), plus the process
-    /// noise accumulated since the last correction: its trace is the square of the total
-    /// [`Ahrs::angular_spread`]. Before the first sample: that of a uniform orientation's
-    /// spread.
+    /// moments (`4 Σ ω_i u_i u_iᵀ`, `u_i` the principal directions at the mode) plus the process
+    /// noise accumulated since the last correction, each direction scaled by the innovations'
+    /// average (tilt and heading apart), plus the heading reference's variance about the
+    /// vertical (module `uncertainty`, docs/design.md "AHRS"): its trace is the square of the
+    /// total [`Ahrs::angular_spread`]. Before the first sample: that of a uniform
+    /// orientation's spread.
     pub fn orientation_covariance(&self) -> Result<[f64; 9]> {
-        let mut body = Matrix3::zeros();
-        let q = match &self.filter {
-            None => {
-                // the uniform distribution: ω_i = 1/4
-                body = Matrix3::identity() * (4.0 * 0.25);
-                [1.0, 0.0, 0.0, 0.0]
-            }
-            Some(f) => {
-                let core = f.core4()?;
-                let (m, _) = core.params();
-                let q = core.mode();
-                for (u, w) in bias::principal_directions(m, &q)
-                    .iter()
-                    .zip(&self.sample_state.omega)
-                {
-                    body += u * u.transpose() * (4.0 * w.max(0.0));
-                }
-                body += bias::psd(&self.sample_state.bias.pending);
-                q
-            }
+        let world = match self.stated_covariance()? {
+            Some((c, _)) => c,
+            // the uniform distribution: ω_i = 1/4
+            None => Matrix3::identity(),
         };
-        let r = q4::to_matrix(&q);
-        let r = Matrix3::from_fn(|i, j| r[i][j]);
-        let world = r * body * r.transpose();
         let mut out = [0.0; 9];
         for i in 0..3 {
             for j in 0..3 {
@@ -360,6 +342,31 @@ impl Ahrs {
             }
         }
         Ok(out)
+    }
+
+    /// The stated covariance (world frame) and its variances along the state's principal
+    /// directions (module `uncertainty`); `None` before the first sample.
+    fn stated_covariance(&self) -> Result<Option<(Matrix3<f64>, [f64; 3])>> {
+        let Some(f) = &self.filter else {
+            return Ok(None);
+        };
+        let core = f.core4()?;
+        let (m, _) = core.params();
+        let q = core.mode();
+        let r = q4::to_matrix(&q);
+        let r = Matrix3::from_fn(|i, j| r[i][j]);
+        let dirs = bias::principal_directions(m, &q).map(|u| r * u);
+        let var: [f64; 3] = std::array::from_fn(|i| 4.0 * self.sample_state.omega[i]);
+        // the pending noise made positive semi-definite, as the next correction takes it
+        let pending = r * bias::psd(&self.sample_state.bias.pending) * r.transpose();
+        Ok(Some(uncertainty::stated(
+            &dirs,
+            &var,
+            &pending,
+            &self.sample_state.calib,
+            self.sample_state.mag.heading_reference_variance(),
+            self.sample_state.gap_stated,
+        )))
     }
 
     /// The health readout (module `health`): how well the sensors agree with the model
@@ -865,6 +872,7 @@ fn step(
     let scale = p.gyro_scale_noise * rate;
     // at most 1 rad² per sample: a wider noise is uniform for all purposes
     let q = ((p.gyro_noise * p.gyro_noise + scale * scale) * h + extra).min(1.0);
+    s.gap_stated += extra;
     // the bias's random walk: variance per second
     let walk = if p.bias_time > 0.0 {
         p.bias_std * p.bias_std / p.bias_time
@@ -930,6 +938,7 @@ fn correct(p: &AhrsParams, core: &mut Core<4>, s: &mut SampleState) -> Result<()
     // the period's length and the time the sensors' samples covered in it (module `timing`)
     let (t, t_acc, t_mag) = s.times.take_period();
     let noise = s.bias.take_pending();
+    let prior_total = 4.0 * (s.omega[0] + s.omega[1] + s.omega[2]) + noise.trace();
     core.compose_moment(&Vector4::from(s.omega), &noise_moment(&noise))?;
     let lam_prior = {
         let (m, z) = core.params();
@@ -961,7 +970,7 @@ fn correct(p: &AhrsParams, core: &mut Core<4>, s: &mut SampleState) -> Result<()
         evidence += heading_exponent(&q4::mul(&rz, &q_prior), kappa);
         observed = true;
     }
-    let innovation = s.health.correction(
+    let nu = s.health.correction(
         t,
         &lam_prior,
         &q4::rotate_inverse(&q_prior, &UP),
@@ -969,6 +978,12 @@ fn correct(p: &AhrsParams, core: &mut Core<4>, s: &mut SampleState) -> Result<()
         heading.map(|d| (d, p.mag_noise * p.mag_noise)),
         (t_acc > 0.0 && an.is_finite()).then(|| (an - p.gravity) / p.acc_reject),
     );
+    s.calib.correction(
+        t,
+        &nu,
+        (t_acc > 0.0 && an.is_finite()).then(|| (an - p.gravity) / p.gravity),
+    );
+    let innovation = nu.largest();
     if observed {
         core.update_precision(&evidence)?;
     }
@@ -1032,6 +1047,12 @@ fn correct(p: &AhrsParams, core: &mut Core<4>, s: &mut SampleState) -> Result<()
         s.mag.turn_heading(2.0 * dw[3].atan2(dw[0]));
     }
     s.omega = [omega[0], omega[1], omega[2], omega[3]];
+    // the gaps' variance shrinks as the state's does (a Bayes update scales every part of the
+    // prior's variance alike, to first order)
+    let post_total = 4.0 * (omega[0] + omega[1] + omega[2]);
+    if s.gap_stated > 0.0 && prior_total > 0.0 {
+        s.gap_stated *= (post_total / prior_total).clamp(0.0, 1.0);
+    }
     Ok(())
 }
 

@@ -1,0 +1,224 @@
+//! The stated uncertainty of the orientation: the Bingham state's covariance in the units the
+//! sensors show, tilt and heading apart.
+//!
+//! The Bingham state's concentrations come from the noise parameters (`gyro_noise`,
+//! `acc_noise`, `mag_noise`, ...), which are one set for every sensor and recording. They set
+//! how the filter weighs the sensors against each other (its gain), but not how large the
+//! errors are: a clean sensor has errors many times smaller than the defaults assume, a
+//! rough recording larger ones. In a linear-Gaussian filter, multiplying every noise
+//! variance by one factor `s` leaves the gain and the estimate unchanged and multiplies every
+//! covariance by `s`; and the innovations measure `s`: the normalized innovation squared per
+//! degree of freedom (module `health`) has mean `s` when the true noises are `s` times the
+//! model's. So the AHRS states the covariance of the filter with its noises scaled by the
+//! innovations' own average, tilt and heading apart (the accelerometer and the magnetometer
+//! are different sensors with different errors): `s_t` and `s_h`, averages over
+//! [`CALIBRATION_TIME`] of the tilt and heading innovations' `ν` per degree of freedom. The
+//! estimate does not change; the stated spread does.
+//!
+//! A principal direction `u` of the state (world frame) takes the factor
+//! `s(u) = s_t (1 − u_z²) + s_h u_z²`, the share of its variance in tilt and in heading.
+//!
+//! What the innovations cannot show is an error the sensors share with the state. The tilt's
+//! reference is the low-passed specific force, which the state follows: what linear
+//! acceleration has not averaged out, and an accelerometer's scale and offset errors, tilt
+//! the state with it. The accelerometer shows such an error in what it can see — the
+//! low-passed norm's deviation from gravity — and an error with no preferred direction is as
+//! large across the vertical (tilt) as along it (norm): each horizontal axis's variance gains
+//! the mean squared relative deviation `((|ā| − g)/g)²` over [`CALIBRATION_TIME`].
+//!
+//! Likewise the
+//! heading's reference is the local magnetic field, which indoors deviates from the Earth's by
+//! degrees from place to place; the state follows the local field, so the innovations stay
+//! small while the heading is off by the deviation. The magnetometer shows the field's
+//! inhomogeneity in what it can see — the changes of the field's dip and norm as the sensor
+//! moves — and a deviation with no preferred direction is as large in the horizontal
+//! direction (heading) as in the vertical (dip) and along the field (norm). So the heading's
+//! variance gains the field's directional variance ([`Inhomogeneity`]: the variance over
+//! [`CALIBRATION_TIME`] of the dip and of the relative norm, each smoothed over
+//! [`SMOOTH_TIME`] so that the sensor's white noise does not count), over `cos²(dip)` (a
+//! horizontal deviation `δ` turns the heading by `δ/(|m| cos dip)`).
+
+use nalgebra::{Matrix3, Vector3};
+
+use super::health::{Average, Innovations};
+
+/// The time constant (s) of the innovation averages that scale the stated covariance: long
+/// enough to hold hundreds of corrections' worth of independent innovations (the tilt's and
+/// heading's low-pass averages decorrelate within a few seconds), short enough to follow a
+/// change of the motion (a walk, then a run) within a minute.
+pub(super) const CALIBRATION_TIME: f64 = 30.0;
+
+/// The time constant (s) over which the norm and dip are smoothed before their variation
+/// counts as the field's inhomogeneity: the sensor's white noise averages out over it (50
+/// samples at 50 Hz), while the changes of the field with the position, which a hand-held or
+/// robot-borne sensor crosses at up to a few metres per second over structures of a metre or
+/// more, take longer.
+pub(super) const SMOOTH_TIME: f64 = 1.0;
+
+/// The time (s) over which the variance factor moves from 1 (the model's own spread) to the
+/// innovations' average. Their average measures the noises' scale once the state has settled
+/// to the steady state its gain implies: after a start, or while a bias of degrees per second
+/// is being learned, the innovations show the start, and the state's error is still what the
+/// model's initial spread says. The state settles within a few of the accelerometer's and the
+/// magnetometer's averaging times (`acc_tau` 1.5 s, `mag_tau` 3 s).
+const STARTUP_TIME: f64 = 5.0;
+
+/// The smallest and the largest variance factor: a state whose innovations vanish (a
+/// simulated, noise-free stream) keeps a hundredth of its modelled spread; a model a hundred
+/// times too optimistic is a wrong input, which the health readout flags.
+const MIN_SCALE: f64 = 1e-4;
+const MAX_SCALE: f64 = 1e4;
+
+/// The running averages of the innovations, part of the AHRS's per-sample state.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(super) struct Calibration {
+    tilt: Average,
+    heading: Average,
+    /// The seconds of corrections each average has seen.
+    tilt_time: f64,
+    heading_time: f64,
+    /// The low-passed accelerometer's squared relative deviation from gravity.
+    gravity: Average,
+}
+
+impl Calibration {
+    /// The innovations of one correction of period `t` (s), and the low-passed
+    /// accelerometer's relative deviation from gravity `(|ā| − g)/g` if it observed the tilt.
+    pub(super) fn correction(&mut self, t: f64, nu: &Innovations, gravity_dev: Option<f64>) {
+        let alpha = (t / CALIBRATION_TIME).min(1.0);
+        if let Some(x) = gravity_dev {
+            self.gravity.push(x * x, alpha);
+        }
+        if let Some(x) = nu.tilt_scale {
+            self.tilt.push(x, alpha);
+            self.tilt_time += t;
+        }
+        if let Some(x) = nu.heading_scale {
+            self.heading.push(x, alpha);
+            self.heading_time += t;
+        }
+    }
+
+    /// The variance factors `(s_t, s_h)`: 1 before the sensor's first innovation, then
+    /// moving to the innovations' average over [`STARTUP_TIME`] (module documentation).
+    pub(super) fn scales(&self) -> (f64, f64) {
+        let s = |a: &Average, time: f64| {
+            if a.is_empty() || !a.value().is_finite() {
+                1.0
+            } else {
+                let w = 1.0 - (-time / STARTUP_TIME).exp();
+                (1.0 - w + w * a.value()).clamp(MIN_SCALE, MAX_SCALE)
+            }
+        };
+        (
+            s(&self.tilt, self.tilt_time),
+            s(&self.heading, self.heading_time),
+        )
+    }
+
+    /// The variance (rad² per horizontal axis) of the tilt reference's error: the mean
+    /// squared relative deviation of the low-passed accelerometer's norm from gravity (module
+    /// documentation).
+    pub(super) fn tilt_reference_variance(&self) -> f64 {
+        self.gravity.value()
+    }
+
+    /// The factor `s_t (1 − u_z²) + s_h u_z²` of a world-frame unit direction `u`.
+    pub(super) fn scale_along(&self, u: &Vector3<f64>) -> f64 {
+        let (st, sh) = self.scales();
+        let z2 = (u.z * u.z).min(1.0);
+        st * (1.0 - z2) + sh * z2
+    }
+}
+
+/// The stated covariance (rad², world frame) and the variances along the state's principal
+/// directions: `dirs` the principal directions at the mode (world frame, unit), `var` the
+/// filter's variances along them, `extra` a further covariance in the same frame (the process
+/// noise pending since the last correction), `calib` the factors and the tilt reference's
+/// variance, `heading_ref` the heading reference's variance (rad²), `gap` the variance (rad² per
+/// axis) that gyroscope gaps have added, which is physical and in the filter's covariance
+/// unscaled: it is stated as it is, not scaled. Returns `(C, v)` with `trace C = Σ v`.
+pub(super) fn stated(
+    dirs: &[Vector3<f64>; 3],
+    var: &[f64; 3],
+    extra: &Matrix3<f64>,
+    calib: &Calibration,
+    heading_ref: f64,
+    gap: f64,
+) -> (Matrix3<f64>, [f64; 3]) {
+    let tilt_ref = calib.tilt_reference_variance();
+    let s: [f64; 3] = std::array::from_fn(|i| calib.scale_along(&dirs[i]));
+    let mut c = Matrix3::zeros();
+    let mut v = [0.0; 3];
+    // the pending noise in the principal basis, scaled as D^½ Ñ D^½ (a congruence: it stays
+    // positive semi-definite)
+    for i in 0..3 {
+        for j in 0..3 {
+            let nij = (dirs[i].transpose() * extra * dirs[j])[0] * (s[i] * s[j]).sqrt();
+            let mut cij = nij;
+            if i == j {
+                cij += var[i].max(0.0) * s[i];
+                let z2 = dirs[i].z * dirs[i].z;
+                // the gaps' variance is in `var` scaled by s: state it at its physical size
+                let g = (gap * (1.0 - s[i])).max(0.0);
+                v[i] = cij.max(0.0) + g + heading_ref * z2 + tilt_ref * (1.0 - z2).max(0.0);
+                c += dirs[i] * dirs[i].transpose() * g;
+            }
+            c += dirs[i] * dirs[j].transpose() * cij;
+        }
+    }
+    c[(0, 0)] += tilt_ref;
+    c[(1, 1)] += tilt_ref;
+    c[(2, 2)] += heading_ref;
+    (c, v)
+}
+
+/// The variation of the field's norm and dip over the motion, which shows how far the local
+/// field's direction varies (module documentation): the norm (relative) and the dip of the
+/// undisturbed samples, smoothed over [`SMOOTH_TIME`], and their exponentially weighted mean and
+/// mean square over [`CALIBRATION_TIME`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(super) struct Inhomogeneity {
+    /// The smoothed norm and dip, and the seconds smoothed so far.
+    smooth: (f64, f64),
+    smoothed: f64,
+    /// The averages of the relative norm, the dip and their squares.
+    norm: Average,
+    norm2: Average,
+    dip: Average,
+    dip2: Average,
+}
+
+impl Inhomogeneity {
+    /// One undisturbed sample of norm `norm` and dip `dip` (rad), `h` seconds long.
+    pub(super) fn push(&mut self, norm: f64, dip: f64, h: f64) {
+        if self.smoothed == 0.0 {
+            self.smooth = (norm, dip);
+        } else {
+            let a = h / (SMOOTH_TIME + h);
+            self.smooth.0 += a * (norm - self.smooth.0);
+            self.smooth.1 += a * (dip - self.smooth.1);
+        }
+        self.smoothed += h;
+        // the smoothing starts from one raw sample: its noise counts until it has averaged out
+        if self.smoothed < 2.0 * SMOOTH_TIME
+            || self.smooth.0.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+        {
+            return;
+        }
+        let alpha = (h / CALIBRATION_TIME).min(1.0);
+        // the norm relative to its own average: the log, whose variance is the relative one
+        let n = self.smooth.0.ln();
+        self.norm.push(n, alpha);
+        self.norm2.push(n * n, alpha);
+        self.dip.push(self.smooth.1, alpha);
+        self.dip2.push(self.smooth.1 * self.smooth.1, alpha);
+    }
+
+    /// The field's directional variance per direction (rad²): the mean of the relative
+    /// norm's and the dip's variances (0 before there are any).
+    pub(super) fn variance(&self) -> f64 {
+        let var = |m: &Average, m2: &Average| (m2.value() - m.value() * m.value()).max(0.0);
+        0.5 * (var(&self.norm, &self.norm2) + var(&self.dip, &self.dip2))
+    }
+}
