@@ -19,3 +19,6 @@ pub(super) fn cross3(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
 pub(super) fn scale3(a: &[f64; 3], s: f64) -> [f64; 3] {
     [a[0] * s, a[1] * s, a[2] * s]
 }
+
+/// The world's "up" (ENU).
+pub(super) const UP: [f64; 3] = [0.0, 0.0, 1.0];
