@@ -2,9 +2,9 @@
 //! the input (units, signs, axes, the period) shows instead of yielding a confident wrong
 //! orientation.
 //!
-//! At every correction (module `ahrs`, step 5) the low-passed accelerometer direction `ā` and
-//! the heading error `δ` of the averaged field are compared with the prediction before the
-//! correction, each normalized by the variance it should have if the model held: the state's
+//! At every correction (module `ahrs`, step 5.4) the innovation of each sensor's evidence item
+//! (module `evidence`) — the low-passed accelerometer direction `ā`, the heading error `δ` of
+//! the averaged field — is compared with the prediction before the correction, each normalized by the variance it should have if the model held: the state's
 //! own spread in that direction (from the prior's precision `Λ`, `Σ = (Λ + 3/π² I)⁻¹`, body
 //! frame: no angle's variance exceeds a uniform angle's, π²/3) plus the
 //! measurement's (`acc_noise²·(1 + ((|ā| − g)/acc_reject)²)` for the direction of "up",

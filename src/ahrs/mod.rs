@@ -7,33 +7,53 @@
 //! Units: gyroscope rad/s, accelerometer m/s² (specific force: `+g` up at rest), magnetometer in
 //! any consistent unit.
 //!
-//! # One sample (the per-sensor steps)
+//! # One sample: the steps, in this order
 //!
-//! 1. **Rest and the bias at rest.** The gyroscope and accelerometer are low-pass filtered;
-//!    while both (band-limited to 20 ms, so that the test sees the same noise at every sample
-//!    rate) stay within thresholds of their low-pass values for
+//! One seam per sensor: each sensor's per-sample step lives in its own module, and at a
+//! correction each sensor contributes one evidence item (module `evidence`: the exponent of its
+//! likelihood, its innovation with its degrees of freedom and its variance), which the health
+//! readout, the Bayes product and the bias learning read as a list. This list of steps is
+//! their order; the function `step` of this module calls them in it.
+//!
+//! 0. **Restarts.** An average gone stale — its sensor back after a loss longer than its time
+//!    constant, or turned by a gyroscope gap by more than its sensor's noise — restarts from
+//!    this sample (modules `accel`, `magnetic`; module `timing`).
+//! 1. **Rest and the bias at rest** (module `rest`). The gyroscope and accelerometer are
+//!    low-pass filtered; while both (band-limited to 20 ms, so that the test sees the same
+//!    noise at every sample rate) stay within thresholds of their low-pass values for
 //!    [`AhrsParams::rest_time`], the raw gyroscope samples of the still phase measure the
-//!    bias, their spread the gyroscope's noise: a Kalman step of the bias with their mean
-//!    (module `rest`: in half-second blocks, the edges of the phase left out).
-//! 2. **Gyroscope.** The state is turned exactly by the body-frame increment of the
-//!    bias-corrected rate, `q ← q ⊗ Δq`; the process noise of the sample — `gyro_noise²·dt`,
-//!    `(gyro_scale_noise·|ω|)²·dt`, and what the bias's uncertainty adds through its
-//!    coupling (module `bias`) — is accumulated.
-//! 3. **Accelerometer** (skipped for a non-finite sample or `|acc| < gravity/4`): low-passed in
-//!    the gyroscope-integrated frame (second-order Butterworth, `acc_tau`), where gravity
-//!    stands still and linear accelerations average out.
-//! 4. **Magnetometer** (skipped for a missing, zero or non-finite sample): the disturbance
-//!    test, decided per phase with hysteresis, and the field averaged in the world frame of
-//!    the estimate (module `magnetic`).
-//! 5. **Correction**, every [`CORRECTION_PERIOD`] (20 ms; every sample below 50 Hz): the state
-//!    is composed with the accumulated process noise (moment matching), then multiplied by
-//!    the evidence of the period — the tilt likelihood `exp(κ_a upᵀ R(q) ā/|ā|)` and the
-//!    heading likelihood (von Mises in the heading error of the averaged field, no tilt
-//!    information) — in one exact Bayes product. The evidence is per second:
-//!    `κ_a = T/(acc_noise²·acc_tau)` for a period `T` (divided by
+//!    bias, their spread the gyroscope's noise: a Kalman step of the bias with their mean (in
+//!    half-second blocks, the edges of the phase left out).
+//! 2. **Gyroscope** (module `gyro`). The state is turned exactly by the body-frame increment of
+//!    the bias-corrected rate, `q ← q ⊗ Δq`; the process noise of the sample —
+//!    `gyro_noise²·dt`, `(gyro_scale_noise·|ω|)²·dt`, what a gap's carried rate cannot know, and
+//!    what the bias's uncertainty adds through its coupling (module `bias`) — is accumulated.
+//! 3. **Accelerometer** (module `accel`; skipped for a non-finite sample or
+//!    `|acc| < gravity/4`): low-passed in the gyroscope-integrated frame (second-order
+//!    Butterworth, `acc_tau`), where gravity stands still and linear accelerations average out.
+//! 4. **Magnetometer** (module `magnetic`; skipped for a missing, zero or non-finite sample):
+//!    the disturbance test, decided per phase with hysteresis, and the field averaged in the
+//!    world frame of the estimate.
+//! 5. **Correction** (module `correction`), every [`CORRECTION_PERIOD`] (20 ms; every sample
+//!    below 50 Hz):
+//!    1. the prior: the state composed with the accumulated process noise (moment matching);
+//!    2. the accelerometer's tilt evidence, the likelihood `exp(κ_a upᵀ R(q) ā/|ā|)`
+//!       (module `accel`);
+//!    3. the magnetometer's heading evidence, von Mises in the heading error of the averaged
+//!       field, no tilt information (module `magnetic`);
+//!    4. the health readout scores every item's innovation against the prior (module
+//!       `health`);
+//!    5. one exact Bayes product with every item's exponent;
+//!    6. the bias learned from the move of the mode (module `bias`), unless at rest or
+//!       recovering from a large error;
+//!    7. the field's average turned with the heading correction (module `magnetic`).
+//!
+//!    The evidence is per second: `κ_a = T/(acc_noise²·acc_tau)` for a period `T` (divided by
 //!    `1 + ((|ā| − g)/acc_reject)²`), `κ_m = T/(mag_noise²·mag_tau)`; the same defaults
-//!    therefore behave the same at 100 Hz and at 1 kHz. The move of the mode then updates
-//!    the bias (module `bias`).
+//!    therefore behave the same at 100 Hz and at 1 kHz.
+//!
+//! A new sensor (an external heading, say) is a module with its state, its per-sample step and
+//! its evidence item, a field of the per-sample state, and its calls in `step`.
 //!
 //! The state is committed at the end of the sample: a refused sample (non-finite gyroscope, a
 //! numerical failure) leaves the AHRS exactly as it was. No allocation, no copy of the filter.
@@ -75,13 +95,12 @@ mod lowpass;
 mod magnetic;
 mod params;
 mod rest;
+mod state;
 mod timing;
 mod vec3;
 
 use accel::Accel;
-use bias::BiasState;
 use gyro::Gyro;
-use health::HealthState;
 pub use health::{AhrsHealth, HEALTH_THRESHOLD, HEALTH_TIME};
 use latency::{turn_forward, LatencyEstimator};
 use lowpass::Coeffs;
@@ -92,6 +111,7 @@ pub use params::{
     MIN_STEP_NOISE,
 };
 use rest::Rest;
+use state::SampleState;
 use timing::SensorTimes;
 use vec3::{cross3, norm3, scale3, UP};
 
@@ -106,28 +126,6 @@ const SNAP: f64 = 1e-6;
 /// values near the largest double has an overflowing norm: it counts as no sample).
 fn usable3(v: &[f64; 3]) -> bool {
     v.iter().all(|x| x.is_finite()) && norm3(v).is_finite()
-}
-
-/// The state a sample changes besides the Bingham state (small; copied, changed and committed
-/// at the end of the sample): one part per sensor, the bias, the times, the health readout.
-#[derive(Debug, Clone, PartialEq)]
-struct SampleState {
-    /// The gyroscope bias's Kalman filter and the accumulated process noise (module `bias`).
-    bias: BiasState,
-    /// The rest detection and the samples of the current still phase (module `rest`).
-    rest: Rest,
-    /// The gyroscope's last rate, the motion's statistics and gaps (module `gyro`).
-    gyro: Gyro,
-    /// The accelerometer's average (module `accel`).
-    accel: Accel,
-    /// The magnetometer's reference, disturbance state and average (module `magnetic`).
-    mag: Magnetic,
-    /// Each sensor's missing time and its coverage of the correction period.
-    times: SensorTimes,
-    /// `omega(z)` of the Bingham state (cached for the next composition and the spread).
-    omega: [f64; 4],
-    /// The running state of the health readout.
-    health: HealthState,
 }
 
 /// The AHRS. Create it with [`Ahrs::new`], feed it samples with [`Ahrs::update`] (or
@@ -158,16 +156,7 @@ impl Ahrs {
             params: *params,
             coeffs,
             filter: None,
-            sample_state: SampleState {
-                bias: BiasState::new(params.bias_std),
-                rest: Rest::default(),
-                gyro: Gyro::default(),
-                accel: Accel::new(&coeffs, &[0.0; 3]),
-                mag: Magnetic::new(),
-                times: SensorTimes::default(),
-                omega: [0.25; 4],
-                health: HealthState::default(),
-            },
+            sample_state: SampleState::new(params, &coeffs),
             latency: LatencyEstimator::new(params.sample_time),
             samples: 0,
             last_time: None,
