@@ -2,9 +2,9 @@
 //! the input (units, signs, axes, the period) shows instead of yielding a confident wrong
 //! orientation.
 //!
-//! At every correction (module `ahrs`, step 5) the low-passed accelerometer direction `ā` and
-//! the heading error `δ` of the averaged field are compared with the prediction before the
-//! correction, each normalized by the variance it should have if the model held: the state's
+//! At every correction (module `ahrs`, step 5.4) the innovation of each sensor's evidence item
+//! (module `evidence`) — the low-passed accelerometer direction `ā`, the heading error `δ` of
+//! the averaged field — is compared with the prediction before the correction, each normalized by the variance it should have if the model held: the state's
 //! own spread in that direction (from the prior's precision `Λ`, `Σ = (Λ + 3/π² I)⁻¹`, body
 //! frame: no angle's variance exceeds a uniform angle's, π²/3) plus the
 //! measurement's (`acc_noise²·(1 + ((|ā| − g)/acc_reject)²)` for the direction of "up",
@@ -42,6 +42,7 @@ use std::f64::consts::PI;
 use nalgebra::{Matrix3, Vector3};
 
 use super::bias::pinv;
+use super::evidence::{present, Evidence, Innovation};
 use super::timing::SensorTimes;
 
 /// The time constant (s) of the health averages (`BINGHAM_AHRS_HEALTH_TIME` in C): long enough that one burst of linear
@@ -174,56 +175,65 @@ impl HealthState {
         self.rejected.push(if used { 0.0 } else { 1.0 }, alpha);
     }
 
-    /// One correction of period `t` (s) with the prior's body-frame precision `lam` (rad⁻²),
-    /// the predicted body-frame up `b_hat` (unit), the observed one `b` (unit) with its
-    /// angular variance `var_a` (rad², or `None` without a tilt observation), and the heading
-    /// error `delta` (rad) with its variance `var_m` (or `None`). Returns the correction's
-    /// normalized innovations per degree of freedom (module `uncertainty` averages them).
+    /// The gravity score of a correction of period `t` (s): `excess` the low-passed
+    /// accelerometer's deviation from gravity in units of `acc_reject` (`None` without an
+    /// accelerometer sample in the period).
+    pub(super) fn gravity(&mut self, t: f64, excess: Option<f64>) {
+        let alpha = (t / HEALTH_TIME).min(1.0);
+        if let Some(x) = excess {
+            self.gravity.push(x * x, alpha);
+        }
+    }
+
+    /// One correction of period `t` (s) with the prior's body-frame precision `lam` (rad⁻²)
+    /// and the sensors' evidence (module `evidence`; `None` for a sensor without evidence this
+    /// period): each innovation, normalized by its variance (the state's spread plus the
+    /// measurement's `var`), per degree of freedom, feeds the average of what it observes.
+    /// Returns the correction's largest normalized innovation per degree of freedom (0
+    /// without evidence).
     pub(super) fn correction(
         &mut self,
         t: f64,
         lam: &Matrix3<f64>,
-        b_hat: &[f64; 3],
-        tilt: Option<(&[f64; 3], f64)>,
-        heading: Option<(f64, f64)>,
-        gravity_excess: Option<f64>,
+        evidence: &[Option<Evidence>],
     ) -> Innovations {
         let alpha = (t / HEALTH_TIME).min(1.0);
-        if let Some(x) = gravity_excess {
-            self.gravity.push(x * x, alpha);
-        }
         let mut out = Innovations::default();
-        if tilt.is_none() && heading.is_none() {
+        if present(evidence).next().is_none() {
             return out;
         }
         // The state's covariance (rad², body frame; see `covariance`).
         let sigma = covariance(lam);
-        let bh = Vector3::from(*b_hat);
-        if let Some((b, var_a)) = tilt {
-            let b = Vector3::from(*b);
-            let c = bh.cross(&b);
-            let angle = c.norm().atan2(bh.dot(&b));
-            // the innovation as a vector in the plane perpendicular to b̂, towards b
-            let dir = b - bh * bh.dot(&b);
-            let e = if dir.norm() > 0.0 {
-                dir.normalize() * angle
-            } else {
-                Vector3::zeros()
+        for ev in present(evidence) {
+            // the state's variance along what the sensor sees, per degree of freedom
+            let p = match &ev.innovation {
+                Innovation::Tilt { up, .. } => {
+                    0.5 * (sigma.trace() - (up.transpose() * sigma * up)[0]).max(0.0)
+                }
+                Innovation::Heading { up, .. } => (up.transpose() * sigma * up)[0].max(0.0),
             };
-            let nis = tilt_nis(&sigma, &bh, &e, var_a);
-            self.tilt.push(nis / 2.0, alpha);
-            out.tilt = Some(nis / 2.0);
-            let p_tilt = 0.5 * (sigma.trace() - (bh.transpose() * sigma * bh)[0]).max(0.0);
-            out.tilt_scale = Some(nis / 2.0 / expected_nis(p_tilt, var_a));
-            self.tilt_innovation = angle;
-        }
-        if let Some((delta, var_m)) = heading {
-            let var = (bh.transpose() * sigma * bh)[0].max(0.0) + var_m;
-            self.heading.push(delta * delta / var, alpha);
-            self.heading_innovation = delta;
-            out.heading = Some(delta * delta / var);
-            let p_heading = var - var_m;
-            out.heading_scale = Some(delta * delta / var / expected_nis(p_heading, var_m));
+            let nis = match &ev.innovation {
+                Innovation::Tilt { up, e, .. } => tilt_nis(&sigma, up, e, ev.var),
+                Innovation::Heading { up, angle } => {
+                    let var = (up.transpose() * sigma * up)[0].max(0.0) + ev.var;
+                    angle * angle / var
+                }
+            } / ev.innovation.dof();
+            let scale = nis / expected_nis(p, ev.var);
+            match &ev.innovation {
+                Innovation::Tilt { angle, .. } => {
+                    self.tilt.push(nis, alpha);
+                    self.tilt_innovation = *angle;
+                    out.tilt = Some(nis);
+                    out.tilt_scale = Some(scale);
+                }
+                Innovation::Heading { angle, .. } => {
+                    self.heading.push(nis, alpha);
+                    self.heading_innovation = *angle;
+                    out.heading = Some(nis);
+                    out.heading_scale = Some(scale);
+                }
+            }
         }
         out
     }
@@ -260,9 +270,9 @@ impl HealthState {
 /// measurement's error is correlated over its low-pass time constant `τ`, over which the state
 /// has followed the same measurement: with the evidence worth `1/(rτ)` per second, the state's
 /// error `ε` is driven by the measurement's error `v` through the gain `K = P/(rτ)`, and in the
-/// steady state `Cov(ε, v) = −K r/(K + 1/τ) = −P r/(P + r)`, so that the innovation
-/// `v − ε`... has the variance `P + r + 2 Cov(ε, v) = (P² + r²)/(P + r)` (module `uncertainty`
-/// divides by this to read the noise scale from the innovations).
+/// steady state `Cov(ε, v) = −K r/(K + 1/τ) = −P r/(P + r)`, so that the innovation `v − ε`
+/// has the variance `P + r + 2 Cov(ε, v) = (P² + r²)/(P + r)` (module `uncertainty` divides
+/// by this to read the noises' scale from the innovations).
 pub(super) fn expected_nis(p: f64, r: f64) -> f64 {
     let t = p + r;
     if t > 0.0 {
@@ -318,6 +328,28 @@ fn tilt_nis(sigma: &Matrix3<f64>, bh: &Vector3<f64>, e: &Vector3<f64>, var_a: f6
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::Matrix4;
+
+    const UP: [f64; 3] = [0.0, 0.0, 1.0];
+
+    /// A tilt evidence item observing the body-frame "up" `b` with variance `var` (the
+    /// predicted "up" the z axis).
+    fn tilt(b: &[f64; 3], var: f64) -> Option<Evidence> {
+        Some(Evidence {
+            exponent: Matrix4::zeros(),
+            innovation: Innovation::tilt(&UP, b),
+            var,
+        })
+    }
+
+    /// A heading evidence item of heading error `delta` with variance `var`.
+    fn heading(delta: f64, var: f64) -> Option<Evidence> {
+        Some(Evidence {
+            exponent: Matrix4::zeros(),
+            innovation: Innovation::heading(&UP, delta),
+            var,
+        })
+    }
 
     #[test]
     fn the_average_is_the_mean_of_equal_values_from_the_start() {
@@ -334,7 +366,7 @@ mod tests {
         // of 3 rad counts against the variance of a uniform angle, π²/3, not against 0
         let lam = Matrix3::from_diagonal(&Vector3::new(1e4, 1e4, 0.0));
         let mut h = HealthState::default();
-        h.correction(0.02, &lam, &[0.0, 0.0, 1.0], None, Some((3.0, 1e-4)), None);
+        h.correction(0.02, &lam, &[heading(3.0, 1e-4)]);
         let r = h.readout(None, &SensorTimes::default());
         assert!(r.heading_score < 3.0, "{}", r.heading_score);
         assert!(r.heading_score > 2.0, "{}", r.heading_score);
@@ -348,7 +380,7 @@ mod tests {
         let lam = Matrix3::identity() / (sd * sd);
         let mut h = HealthState::default();
         let b = [sd.sin(), 0.0, sd.cos()];
-        h.correction(0.02, &lam, &[0.0, 0.0, 1.0], Some((&b, 0.0)), None, None);
+        h.correction(0.02, &lam, &[tilt(&b, 0.0), None]);
         let r = h.readout(None, &SensorTimes::default());
         // the variance is 1/(1/σ² + 3/π²): ν = σ²·(1/σ² + 3/π²)
         let reg = 3.0 / (PI * PI);
@@ -356,14 +388,8 @@ mod tests {
         assert!((r.tilt_score - want).abs() < 1e-12, "{}", r.tilt_score);
         assert!((r.tilt_innovation - sd).abs() < 1e-12);
         // the heading variance adds the prior's spread about up and the measurement's
-        h.correction(
-            0.02,
-            &lam,
-            &[0.0, 0.0, 1.0],
-            None,
-            Some((2.0 * sd, sd * sd)),
-            Some(0.5),
-        );
+        h.gravity(0.02, Some(0.5));
+        h.correction(0.02, &lam, &[None, heading(2.0 * sd, sd * sd)]);
         let r = h.readout(Some(-1.0), &SensorTimes::default());
         let var = 1.0 / (1.0 / (sd * sd) + reg) + sd * sd;
         assert!(

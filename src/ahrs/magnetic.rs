@@ -26,10 +26,14 @@
 
 use nalgebra::Matrix4;
 
+use super::evidence::{Evidence, Innovation};
+use super::gyro::Turn;
+use super::latency::turn_forward;
 use super::lowpass::{Coeffs, InertialLowPass};
 use super::params::AhrsParams;
 use super::uncertainty::Inhomogeneity;
-use super::vec3::{dot3, norm3};
+use super::vec3::{dot3, norm3, UP};
+use crate::filter::Core;
 use crate::quaternion::q4;
 
 /// Time (s) a field must pass the disturbance test without interruption to end a disturbed
@@ -38,8 +42,6 @@ pub(super) const RECOVER_TIME: f64 = 0.5;
 
 /// Rotation rate (rad/s, 20°/s) above which a steady disturbance counts toward a new reference.
 pub(super) const NEW_REF_RATE: f64 = 0.35;
-
-const UP: [f64; 3] = [0.0, 0.0, 1.0];
 
 /// The magnetometer's state in the AHRS.
 #[derive(Debug, Clone, PartialEq)]
@@ -57,6 +59,9 @@ pub(super) struct Magnetic {
     /// The field in the world frame of the estimate, low-passed (`None` until the first
     /// sample of an undisturbed phase).
     lp: Option<InertialLowPass>,
+    /// Whether the average waits to be restarted by the next sample: a gyroscope gap turned it
+    /// with a carried rate by more than the magnetometer's own noise.
+    restart: bool,
     /// The variation of the used samples' norm and dip (module `uncertainty`).
     inhomogeneity: Inhomogeneity,
 }
@@ -71,12 +76,13 @@ impl Magnetic {
             disturbed: false,
             clean_time: 0.0,
             lp: None,
+            restart: false,
             inhomogeneity: Inhomogeneity::default(),
         }
     }
 
     /// The variance (rad²) of the heading reference's error: the field's directional variance
-    /// from the norm's and the dip's deviations, over `cos²(dip)` (module `uncertainty`); 0
+    /// from the norm's and the dip's variation, over `cos²(dip)` (module `uncertainty`); 0
     /// without a reference.
     pub(super) fn heading_reference_variance(&self) -> f64 {
         let Some((_, dip)) = self.reference else {
@@ -112,6 +118,42 @@ impl Magnetic {
     /// alone since its last sample.
     pub(super) fn restart_average(&mut self) {
         self.lp = None;
+    }
+
+    /// Before the sample's other steps: a field sample (`present`) after a loss longer than
+    /// `mag_tau` (`missing` seconds without one), or after a gap that turned the average,
+    /// restarts the average.
+    pub(super) fn restart_if_stale(&mut self, p: &AhrsParams, missing: f64, present: bool) {
+        if present && (missing > p.mag_tau || self.restart) {
+            self.restart_average();
+            self.restart = false;
+        }
+    }
+
+    /// A gyroscope gap has ended that turned the averages with a carried rate by the variance
+    /// `turned` (rad², the turn vector's): beyond the magnetometer's noise, the average
+    /// restarts at the next sample.
+    pub(super) fn after_gap(&mut self, p: &AhrsParams, turned: f64) {
+        self.restart |= turned > p.mag_noise * p.mag_noise;
+    }
+
+    /// One sample (step 4 of the module `ahrs`; `mag` `None` without a usable field sample),
+    /// `h` seconds after the previous one, with the state `core` after the gyroscope's `turn`:
+    /// the field turned forward by its latency, then [`Magnetic::observe`]. Returns `None`
+    /// without a sample, else whether it was used.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn step(
+        &mut self,
+        p: &AhrsParams,
+        c: &Coeffs,
+        core: &Core<4>,
+        turn: &Turn,
+        h: f64,
+        repeat: u32,
+        mag: Option<&[f64; 3]>,
+    ) -> Option<bool> {
+        let m = turn_forward(mag?, &turn.w_lead, c.mag_lead);
+        Some(self.observe(&core.mode(), &m, turn.rate, h, repeat, p, c))
     }
 
     /// One field sample `m` (sensor frame, latency-compensated) with the current estimate `q`
@@ -215,6 +257,44 @@ impl Magnetic {
         let y = self.lp.as_ref()?.y;
         let h = (y[0] * y[0] + y[1] * y[1]).sqrt();
         (h > 1e-3 * norm3(&y)).then(|| y[0].atan2(y[1]))
+    }
+
+    /// The heading evidence of a correction (step 5.3 of the module `ahrs`) whose used samples
+    /// covered `t_mag` seconds, with the prior's mode `q_prior`: the heading error `δ` of the
+    /// average gives the heading-only observation `exp(−2κ_m e_z²)`, `e = q ⊗ q_m*`, `q_m` the
+    /// prior mode turned by `δ` about the vertical, `κ_m = T_mag/(mag_noise²·mag_tau)`; its
+    /// innovation `δ` (1 degree of freedom) has the variance `mag_noise²`. `None` without used
+    /// samples in the period or a heading error (disturbed, no reference, a vertical field).
+    pub(super) fn heading_evidence(
+        &self,
+        p: &AhrsParams,
+        t_mag: f64,
+        q_prior: &[f64; 4],
+    ) -> Option<Evidence> {
+        let delta = if t_mag > 0.0 {
+            self.heading_error()
+        } else {
+            None
+        }?;
+        let kappa = t_mag / (p.mag_noise * p.mag_noise * p.mag_tau);
+        let rz = [(0.5 * delta).cos(), 0.0, 0.0, (0.5 * delta).sin()];
+        Some(Evidence {
+            exponent: heading_exponent(&q4::mul(&rz, q_prior), kappa),
+            innovation: Innovation::heading(&q4::rotate_inverse(q_prior, &UP), delta),
+            var: p.mag_noise * p.mag_noise,
+        })
+    }
+
+    /// After a correction with this heading evidence (step 5.7 of the module `ahrs`): the
+    /// average turned with the heading correction from the prior's mode `q_prior` to the
+    /// posterior's `q_post`, so that it stays the field relative to the current heading (tilt
+    /// corrections do not turn it: its samples were mapped with the tilt known at their time).
+    pub(super) fn follow_correction(&mut self, q_prior: &[f64; 4], q_post: &[f64; 4]) {
+        let mut dw = q4::mul(q_post, &q4::conj(q_prior));
+        if dw[0] < 0.0 {
+            dw = dw.map(|v| -v);
+        }
+        self.turn_heading(2.0 * dw[3].atan2(dw[0]));
     }
 
     /// Turns the average with a heading correction of the estimate, `q ← Rz(gamma) ⊗ q`

@@ -7,33 +7,53 @@
 //! Units: gyroscope rad/s, accelerometer m/s² (specific force: `+g` up at rest), magnetometer in
 //! any consistent unit.
 //!
-//! # One sample (the per-sensor steps)
+//! # One sample: the steps, in this order
 //!
-//! 1. **Rest and the bias at rest.** The gyroscope and accelerometer are low-pass filtered;
-//!    while both (band-limited to 20 ms, so that the test sees the same noise at every sample
-//!    rate) stay within thresholds of their low-pass values for
+//! One seam per sensor: each sensor's per-sample step lives in its own module, and at a
+//! correction each sensor contributes one evidence item (module `evidence`: the exponent of its
+//! likelihood, its innovation with its degrees of freedom and its variance), which the health
+//! readout, the Bayes product and the bias learning read as a list. This list of steps is
+//! their order; the function `step` of this module calls them in it.
+//!
+//! 0. **Restarts.** An average gone stale — its sensor back after a loss longer than its time
+//!    constant, or turned by a gyroscope gap by more than its sensor's noise — restarts from
+//!    this sample (modules `accel`, `magnetic`; module `timing`).
+//! 1. **Rest and the bias at rest** (module `rest`). The gyroscope and accelerometer are
+//!    low-pass filtered; while both (band-limited to 20 ms, so that the test sees the same
+//!    noise at every sample rate) stay within thresholds of their low-pass values for
 //!    [`AhrsParams::rest_time`], the raw gyroscope samples of the still phase measure the
-//!    bias, their spread the gyroscope's noise: a Kalman step of the bias with their mean
-//!    (module `rest`: in half-second blocks, the edges of the phase left out).
-//! 2. **Gyroscope.** The state is turned exactly by the body-frame increment of the
-//!    bias-corrected rate, `q ← q ⊗ Δq`; the process noise of the sample — `gyro_noise²·dt`,
-//!    `(gyro_scale_noise·|ω|)²·dt`, and what the bias's uncertainty adds through its
-//!    coupling (module `bias`) — is accumulated.
-//! 3. **Accelerometer** (skipped for a non-finite sample or `|acc| < gravity/4`): low-passed in
-//!    the gyroscope-integrated frame (second-order Butterworth, `acc_tau`), where gravity
-//!    stands still and linear accelerations average out.
-//! 4. **Magnetometer** (skipped for a missing, zero or non-finite sample): the disturbance
-//!    test, decided per phase with hysteresis, and the field averaged in the world frame of
-//!    the estimate (module `magnetic`).
-//! 5. **Correction**, every [`CORRECTION_PERIOD`] (20 ms; every sample below 50 Hz): the state
-//!    is composed with the accumulated process noise (moment matching), then multiplied by
-//!    the evidence of the period — the tilt likelihood `exp(κ_a upᵀ R(q) ā/|ā|)` and the
-//!    heading likelihood (von Mises in the heading error of the averaged field, no tilt
-//!    information) — in one exact Bayes product. The evidence is per second:
-//!    `κ_a = T/(acc_noise²·acc_tau)` for a period `T` (divided by
+//!    bias, their spread the gyroscope's noise: a Kalman step of the bias with their mean (in
+//!    half-second blocks, the edges of the phase left out).
+//! 2. **Gyroscope** (module `gyro`). The state is turned exactly by the body-frame increment of
+//!    the bias-corrected rate, `q ← q ⊗ Δq`; the process noise of the sample —
+//!    `gyro_noise²·dt`, `(gyro_scale_noise·|ω|)²·dt`, what a gap's carried rate cannot know, and
+//!    what the bias's uncertainty adds through its coupling (module `bias`) — is accumulated.
+//! 3. **Accelerometer** (module `accel`; skipped for a non-finite sample or
+//!    `|acc| < gravity/4`): low-passed in the gyroscope-integrated frame (second-order
+//!    Butterworth, `acc_tau`), where gravity stands still and linear accelerations average out.
+//! 4. **Magnetometer** (module `magnetic`; skipped for a missing, zero or non-finite sample):
+//!    the disturbance test, decided per phase with hysteresis, and the field averaged in the
+//!    world frame of the estimate.
+//! 5. **Correction** (module `correction`), every [`CORRECTION_PERIOD`] (20 ms; every sample
+//!    below 50 Hz):
+//!    1. the prior: the state composed with the accumulated process noise (moment matching);
+//!    2. the accelerometer's tilt evidence, the likelihood `exp(κ_a upᵀ R(q) ā/|ā|)`
+//!       (module `accel`);
+//!    3. the magnetometer's heading evidence, von Mises in the heading error of the averaged
+//!       field, no tilt information (module `magnetic`);
+//!    4. the health readout scores every item's innovation against the prior (module
+//!       `health`);
+//!    5. one exact Bayes product with every item's exponent;
+//!    6. the bias learned from the move of the mode (module `bias`), unless at rest or
+//!       recovering from a large error;
+//!    7. the field's average turned with the heading correction (module `magnetic`).
+//!
+//!    The evidence is per second: `κ_a = T/(acc_noise²·acc_tau)` for a period `T` (divided by
 //!    `1 + ((|ā| − g)/acc_reject)²`), `κ_m = T/(mag_noise²·mag_tau)`; the same defaults
-//!    therefore behave the same at 100 Hz and at 1 kHz. The move of the mode then updates
-//!    the bias (module `bias`).
+//!    therefore behave the same at 100 Hz and at 1 kHz.
+//!
+//! A new sensor (an external heading, say) is a module with its state, its per-sample step and
+//! its evidence item, a field of the per-sample state, and its calls in `step`.
 //!
 //! The state is committed at the end of the sample: a refused sample (non-finite gyroscope, a
 //! numerical failure) leaves the AHRS exactly as it was. No allocation, no copy of the filter.
@@ -57,107 +77,56 @@
 //! concentration of [`AhrsParams::init_std`] — unless a start was given with
 //! [`Ahrs::set_state`].
 
-use nalgebra::{Matrix3, Matrix4, Vector3, Vector4};
+use nalgebra::Matrix3;
 
 use crate::error::{Error, Result};
 use crate::filter::{BinghamFilter, Core};
 use crate::observation::observation_exponent;
 use crate::quaternion::q4;
 
+mod accel;
 mod bias;
+mod correction;
+mod evidence;
+mod gyro;
 mod health;
 mod latency;
 mod lowpass;
 mod magnetic;
 mod params;
 mod rest;
+mod state;
 mod timing;
 mod uncertainty;
 mod vec3;
 
-use bias::{evidence_precision, noise_moment, pinv, precision, BiasState};
-use health::HealthState;
+use accel::Accel;
+use gyro::Gyro;
 pub use health::{AhrsHealth, HEALTH_THRESHOLD, HEALTH_TIME};
 use latency::{turn_forward, LatencyEstimator};
+use lowpass::Coeffs;
 pub use lowpass::CORRECTION_PERIOD;
-use lowpass::{Coeffs, InertialLowPass};
 use magnetic::{heading_exponent, Magnetic};
 pub use params::{
     AhrsParams, LATENCY_ESTIMATE, MAX_LATENCY, MAX_SAMPLE_TIME, MAX_STEP_TIME, MIN_SAMPLE_TIME,
     MIN_STEP_NOISE,
 };
-use rest::RestWindow;
-use timing::{GyroHold, SensorTimes};
-use uncertainty::Calibration;
-use vec3::{cross3, norm3, scale3};
+use rest::Rest;
+use state::SampleState;
+use timing::SensorTimes;
+use vec3::{cross3, norm3, scale3, UP};
 
 /// The largest rotation (rad) one gyroscope sample may turn (`|gyr|·sample_time`): a million
 /// radians, far beyond any sensor, below where the increment's arithmetic loses meaning.
 pub const MAX_TURN: f64 = 1e6;
 
-/// A correction whose innovation exceeds this many of its predicted standard deviations (the
-/// health readout's normalized innovation per degree of freedom above its square) teaches the
-/// bias nothing (module `bias`: the coupling models small errors).
-const OUTLIER: f64 = 5.0;
-
-/// The largest move of the mode (rad) at a correction that teaches the bias: the coupling's
-/// first-order model (module `bias`) errs by the square of the angle, 1 % at 0.1 rad. A
-/// correction moves the mode by 1e-4 to 1e-2 rad in tracking; larger moves are recoveries
-/// (a wrong start, after a gap), not bias.
-const LINEAR_MOVE: f64 = 0.1;
-
 /// The relative tolerance within which a sample's time step counts as the nominal period.
 const SNAP: f64 = 1e-6;
-
-/// The world's "up" (ENU).
-const UP: [f64; 3] = [0.0, 0.0, 1.0];
 
 /// Whether a sample is usable: every value finite and its norm representable (a vector of
 /// values near the largest double has an overflowing norm: it counts as no sample).
 fn usable3(v: &[f64; 3]) -> bool {
     v.iter().all(|x| x.is_finite()) && norm3(v).is_finite()
-}
-
-/// The state a sample changes besides the Bingham state (small; copied, changed and committed
-/// at the end of the sample).
-#[derive(Debug, Clone, PartialEq)]
-struct SampleState {
-    bias: BiasState,
-    gyr_lp: [f64; 3],
-    acc_lp: [f64; 3],
-    /// The samples band-limited for the rest test (`REST_NOISE_TIME`).
-    gyr_fast: [f64; 3],
-    acc_fast: [f64; 3],
-    rest_timer: f64,
-    /// The raw gyroscope samples of the current still phase (module `rest`).
-    rest: RestWindow,
-    /// Seconds of the current rest (past `rest_time`) over which the bias's random walk is
-    /// held.
-    rest_held: f64,
-    acc_filter: InertialLowPass,
-    mag: Magnetic,
-    /// The gyroscope's last rate and the motion's statistics, for gaps (module `timing`).
-    hold: GyroHold,
-    /// Each sensor's missing time and its coverage of the correction period.
-    times: SensorTimes,
-    /// The variance (rad² per axis) the current gyroscope gap has added by carrying the rate,
-    /// and whether a gap came in the current correction period (module `timing`).
-    gap_var: f64,
-    gap_in_period: bool,
-    /// The accelerometer's and the magnetometer's averages wait to be restarted by their next
-    /// sample: a gyroscope gap turned them with a carried rate by more than their own noise.
-    restart_acc: bool,
-    restart_mag: bool,
-    /// `omega(z)` of the Bingham state (cached for the next composition and the spread).
-    omega: [f64; 4],
-    /// The running state of the health readout.
-    health: HealthState,
-    /// The innovations' averages that scale the stated covariance (module `uncertainty`).
-    calib: Calibration,
-    /// The variance (rad² per axis) that gyroscope gaps and dropped samples have added and the
-    /// corrections have not yet taken out: physical, so the stated covariance carries it
-    /// unscaled (module `uncertainty`).
-    gap_stated: f64,
 }
 
 /// The AHRS. Create it with [`Ahrs::new`], feed it samples with [`Ahrs::update`] (or
@@ -188,28 +157,7 @@ impl Ahrs {
             params: *params,
             coeffs,
             filter: None,
-            sample_state: SampleState {
-                bias: BiasState::new(params.bias_std),
-                gyr_lp: [0.0; 3],
-                acc_lp: [0.0; 3],
-                gyr_fast: [0.0; 3],
-                acc_fast: [0.0; 3],
-                rest_timer: 0.0,
-                rest: RestWindow::default(),
-                rest_held: 0.0,
-                acc_filter: InertialLowPass::new(coeffs.acc, coeffs.acc_warmup, &[0.0; 3]),
-                mag: Magnetic::new(),
-                hold: GyroHold::default(),
-                times: SensorTimes::default(),
-                gap_var: 0.0,
-                gap_in_period: false,
-                restart_acc: false,
-                restart_mag: false,
-                omega: [0.25; 4],
-                health: HealthState::default(),
-                calib: Calibration::default(),
-                gap_stated: 0.0,
-            },
+            sample_state: SampleState::new(params, &coeffs),
             latency: LatencyEstimator::new(params.sample_time),
             samples: 0,
             last_time: None,
@@ -365,7 +313,7 @@ impl Ahrs {
             &pending,
             &self.sample_state.calib,
             self.sample_state.mag.heading_reference_variance(),
-            self.sample_state.gap_stated,
+            self.sample_state.gyro.gap_stated,
         )))
     }
 
@@ -596,21 +544,11 @@ impl Ahrs {
         }
         let omega = f.core4()?.omega()?;
         self.filter = Some(f);
-        self.sample_state.gyr_lp = *gyr;
-        self.sample_state.acc_lp = *acc_raw;
-        self.sample_state.gyr_fast = *gyr;
-        self.sample_state.acc_fast = *acc_raw;
-        self.sample_state.rest_timer = 0.0;
-        self.sample_state.rest = RestWindow::default();
-        self.sample_state.rest_held = 0.0;
-        self.sample_state.acc_filter = InertialLowPass::new(c.acc, c.acc_warmup, &acc);
+        self.sample_state.rest = Rest::start(gyr, acc_raw);
+        self.sample_state.gyro = Gyro::default();
+        self.sample_state.accel = Accel::new(&c, &acc);
         self.sample_state.mag = mag_state;
-        self.sample_state.hold = GyroHold::default();
         self.sample_state.times = SensorTimes::default();
-        self.sample_state.gap_var = 0.0;
-        self.sample_state.gap_in_period = false;
-        self.sample_state.restart_acc = false;
-        self.sample_state.restart_mag = false;
         self.sample_state.omega = [omega[0], omega[1], omega[2], omega[3]];
         self.sample_state.bias.pending = Matrix3::zeros();
         self.samples = 1;
@@ -751,9 +689,9 @@ impl Ahrs {
     }
 }
 
-/// One sample after the first (the per-sensor steps of the module documentation) on the
-/// working copies, `h` seconds after the previous one; returns the gyroscope increment and
-/// whether the field sample was used.
+/// One sample after the first on the working copies, `h` seconds after the previous one: the
+/// per-sensor steps in the order of the module documentation. Returns the gyroscope increment
+/// and whether the field sample was used.
 #[allow(clippy::too_many_arguments)]
 fn step(
     p: &AhrsParams,
@@ -765,295 +703,84 @@ fn step(
     acc: Option<&[f64; 3]>,
     mag: Option<&[f64; 3]>,
 ) -> Result<([f64; 4], bool)> {
-    let dt = p.sample_time;
     // the first-order filters' coefficients for this step, and the number of nominal samples
     // the second-order filters take it as (a zero-order hold over dropped samples)
     let c = &nominal.at_step(p, h);
-    let repeat = (h / dt).round().clamp(1.0, 1e6) as u32;
+    let repeat = (h / p.sample_time).round().clamp(1.0, 1e6) as u32;
 
-    // A sensor back after a loss longer than its averaging time restarts its average: what
-    // the old one holds was turned by the gyroscope alone since (module `timing`). So does a
-    // sensor whose average a gyroscope gap turned with a carried rate by more than the
-    // sensor's own noise.
-    if let Some(a) = acc {
-        if s.times.acc_missing > p.acc_tau || s.restart_acc {
-            s.acc_filter = InertialLowPass::new(c.acc, c.acc_warmup, a);
-            s.restart_acc = false;
-        }
-    }
-    if mag.is_some() && (s.times.mag_missing > p.mag_tau || s.restart_mag) {
-        s.mag.restart_average();
-        s.restart_mag = false;
-    }
+    // 0. Averages gone stale (a loss longer than their time constant, a gap that turned them)
+    // restart from this sample (module `timing`).
+    s.accel.restart_if_stale(p, c, s.times.acc_missing, acc);
+    s.mag
+        .restart_if_stale(p, s.times.mag_missing, mag.is_some());
 
-    // 1. Rest detection and the bias at rest.
-    // The deviations are taken from the samples band-limited to REST_NOISE_TIME, so that the
-    // test sees the same noise at every sample rate (a raw sample's noise grows with √rate:
-    // at 1 kHz a MEMS gyroscope's alone exceeds the threshold now and then, and no rest lasts).
-    // Without a gyroscope sample the test and the rest's timer wait for the next one.
-    if let Some(gyr) = gyr {
-        let mut da = f64::INFINITY;
-        for ((lp, fast), x) in s.gyr_lp.iter_mut().zip(s.gyr_fast.iter_mut()).zip(gyr) {
-            *lp += c.rest_filter * (x - *lp);
-            *fast += c.rest_noise * (x - *fast);
-        }
-        if let Some(a) = acc {
-            for ((lp, fast), x) in s.acc_lp.iter_mut().zip(s.acc_fast.iter_mut()).zip(a) {
-                *lp += c.rest_filter * (x - *lp);
-                *fast += c.rest_noise * (x - *fast);
-            }
-            let (f, l) = (&s.acc_fast, &s.acc_lp);
-            da = norm3(&[f[0] - l[0], f[1] - l[1], f[2] - l[2]]);
-        }
-        let (f, g) = (&s.gyr_fast, &s.gyr_lp);
-        let dg = norm3(&[f[0] - g[0], f[1] - g[1], f[2] - g[2]]);
-        let still = dg < p.rest_gyro && da < p.rest_acc && norm3(g) < 2.0 * p.bias_max;
-        s.rest_timer = if still { s.rest_timer + h } else { 0.0 };
-        s.rest.push(still, gyr, h);
-        if s.rest_timer >= p.rest_time {
-            if let Some((mean, var)) = s.rest.take(p.gyro_noise * p.gyro_noise / dt) {
-                s.bias.rest(&Vector3::from(mean), var);
-                s.bias.clip(p.bias_max);
-            }
-        }
-    }
-
-    // 2. Gyroscope: the exact turn, the process noise accumulated. A sample covers one
-    // nominal period; the rest of a longer interval (dropped samples) is bridged with the
-    // mean of the last and this rate, a missing sample with the last rate (module `timing`).
-    let b = s.bias.b;
-    let (omega, bridged, held) = match gyr {
-        Some(g) => {
-            let omega = [g[0] - b[0], g[1] - b[1], g[2] - b[2]];
-            if h > 1.5 * dt {
-                let bridge = s.hold.bridge(&omega);
-                (omega, Some((bridge, h - dt)), false)
-            } else {
-                (omega, None, false)
-            }
-        }
-        None => (s.hold.rate(), None, true),
-    };
-    let covered = match (gyr.is_some(), bridged) {
-        (false, _) => 0.0,
-        (true, Some(_)) => dt,
-        (true, None) => h,
-    };
-    let w = scale3(&omega, if held { h } else { covered });
-    let rate = norm3(&omega);
-    let mut dq = q4::from_rotation_vector(&w);
-    if let Some((bridge, u)) = bridged {
-        dq = q4::mul(&q4::from_rotation_vector(&scale3(&bridge, u)), &dq);
-    }
-    core.rotate(&dq);
-    // The carried rate's error grows with the whole stretch without a gyroscope sample, not
-    // sample by sample: add what this step adds to the stretch's variance.
-    let extra = if held {
-        let gap = s.times.gyr_missing + h;
-        s.hold.extrapolation_variance(gap, true) - s.hold.extrapolation_variance(gap - h, true)
-    } else {
-        s.hold.extrapolation_variance(h - covered, false)
-    };
-    if held {
-        s.gap_var += extra;
-        s.gap_in_period = true;
-    } else if s.gap_var > 0.0 {
-        // the gap is over: the averages it turned by more than their noise restart
-        let turned = 3.0 * s.gap_var;
-        s.restart_acc |= turned > p.acc_noise * p.acc_noise;
-        s.restart_mag |= turned > p.mag_noise * p.mag_noise;
-        s.gap_var = 0.0;
-    }
+    // 1. Rest detection and the bias at rest (without a gyroscope sample the test and the
+    // rest's timer wait for the next one).
     if let Some(g) = gyr {
-        s.hold.push(&[g[0] - b[0], g[1] - b[1], g[2] - b[2]], h);
+        s.rest.step(p, c, h, g, acc, &mut s.bias);
     }
-    // the turn the latency compensation extrapolates: the rate over one nominal period
-    let w_lead = scale3(&omega, dt);
-    let scale = p.gyro_scale_noise * rate;
-    // at most 1 rad² per sample: a wider noise is uniform for all purposes
-    let q = ((p.gyro_noise * p.gyro_noise + scale * scale) * h + extra).min(1.0);
-    s.gap_stated += extra;
-    // the bias's random walk: variance per second
-    let walk = if p.bias_time > 0.0 {
-        p.bias_std * p.bias_std / p.bias_time
-    } else {
-        0.0
-    };
-    let mut drift = walk * h;
-    // Over a rest the bias is one constant, which the rest's samples measure (module `rest`):
-    // its random walk is held, and added when the rest ends as the variance of a random walk's
-    // end about its mean over the phase (a third of the walk's variance over the phase).
-    if s.rest_timer >= p.rest_time {
-        s.rest_held += h;
-        drift = 0.0;
-    } else if s.rest_held > 0.0 {
-        drift += walk * s.rest_held / 3.0;
-        s.rest_held = 0.0;
-    }
-    let r = q4::to_matrix(&dq);
-    s.bias
-        .predict(&Matrix3::from_fn(|i, j| r[i][j]), h, q, drift);
-    // the estimate is clipped to ±bias_max: its variance need not grow beyond (2·bias_max)²
-    let cap = 3.0 * 4.0 * p.bias_max * p.bias_max;
-    if s.bias.p.trace() > cap {
-        s.bias.p *= cap / s.bias.p.trace();
+
+    // 2. Gyroscope: the exact turn, the process noise accumulated, gaps.
+    let gyr_missing = s.times.gyr_missing;
+    let turn = s
+        .gyro
+        .step(p, core, &mut s.bias, &mut s.rest, gyr_missing, h, gyr);
+    if let Some(turned) = turn.gap_ended {
+        s.accel.after_gap(p, turned);
+        s.mag.after_gap(p, turned);
     }
 
     // 3. Accelerometer: low-passed in the gyroscope-integrated frame.
-    s.acc_filter.turn(&dq);
-    let mut acc_used = false;
-    if let Some(a) = acc {
-        let a = turn_forward(a, &w_lead, c.acc_lead);
-        if norm3(&a) >= 0.25 * p.gravity {
-            for _ in 0..repeat {
-                s.acc_filter.step(&a);
-            }
-            acc_used = true;
-        }
-    }
+    let acc_used = s.accel.step(p, c, &turn, repeat, acc);
 
     // 4. Magnetometer: disturbance phases and the world-frame average.
-    let mag_used = match mag {
-        Some(m) => {
-            let m = turn_forward(m, &w_lead, c.mag_lead);
-            let used = s.mag.observe(&core.mode(), &m, rate, h, repeat, p, c);
-            s.health.mag_sample(used, h);
-            used
-        }
-        None => false,
-    };
+    let mag_seen = s.mag.step(p, c, core, &turn, h, repeat, mag);
+    if let Some(used) = mag_seen {
+        s.health.mag_sample(used, h);
+    }
+    let mag_used = mag_seen == Some(true);
     s.times
         .sample(h, gyr.is_some(), acc_used, mag.is_some(), mag_used);
 
     // 5. Correction, once the samples since the last one span the correction period (the
-    // same cadence as `correct_every` nominal samples).
-    if s.times.period >= c.correct_time - 0.5 * dt {
-        correct(p, core, s)?;
-    }
-    Ok((dq, mag_used))
-}
-
-/// The correction step (module documentation, step 5).
-fn correct(p: &AhrsParams, core: &mut Core<4>, s: &mut SampleState) -> Result<()> {
-    // the period's length and the time the sensors' samples covered in it (module `timing`)
-    let (t, t_acc, t_mag) = s.times.take_period();
-    let noise = s.bias.take_pending();
-    let prior_total = 4.0 * (s.omega[0] + s.omega[1] + s.omega[2]) + noise.trace();
-    core.compose_moment(&Vector4::from(s.omega), &noise_moment(&noise))?;
-    let lam_prior = {
-        let (m, z) = core.params();
-        precision(m, z)
-    };
-    let q_prior = core.mode();
-
-    let mut evidence = Matrix4::zeros();
-    let mut observed = false;
-    let an = norm3(&s.acc_filter.y);
-    let mut tilt = None;
-    if t_acc > 0.0 && an >= 0.25 * p.gravity && an.is_finite() {
-        let excess = (an - p.gravity) / p.acc_reject;
-        let widen = 1.0 + excess * excess;
-        let kappa = t_acc / (p.acc_noise * p.acc_noise * p.acc_tau) / widen;
-        let up_b = scale3(&s.acc_filter.y, 1.0 / an);
-        evidence += observation_exponent(&up_b, &UP, kappa);
-        observed = true;
-        tilt = Some((up_b, p.acc_noise * p.acc_noise * widen));
-    }
-    let heading = if t_mag > 0.0 {
-        s.mag.heading_error()
-    } else {
-        None
-    };
-    if let Some(delta) = heading {
-        let kappa = t_mag / (p.mag_noise * p.mag_noise * p.mag_tau);
-        let rz = [(0.5 * delta).cos(), 0.0, 0.0, (0.5 * delta).sin()];
-        evidence += heading_exponent(&q4::mul(&rz, &q_prior), kappa);
-        observed = true;
-    }
-    let nu = s.health.correction(
-        t,
-        &lam_prior,
-        &q4::rotate_inverse(&q_prior, &UP),
-        tilt.as_ref().map(|(b, v)| (b, *v)),
-        heading.map(|d| (d, p.mag_noise * p.mag_noise)),
-        (t_acc > 0.0 && an.is_finite()).then(|| (an - p.gravity) / p.acc_reject),
-    );
-    s.calib.correction(
-        t,
-        &nu,
-        (t_acc > 0.0 && an.is_finite()).then(|| (an - p.gravity) / p.gravity),
-    );
-    let innovation = nu.largest();
-    if observed {
-        core.update_precision(&evidence)?;
-    }
-    let omega = core.omega()?;
-    let q_post = core.mode();
-    // The posterior covariance in the prior's frame (the prior's precision plus the
-    // evidence's, both at the prior mode: the Gaussian conditioning of the bias needs the two
-    // in one frame; nearly unobserved directions of the two states need not line up).
-    let sigma_post = pinv(&(lam_prior + evidence_precision(&q_prior, &evidence)));
-
-    // The bias from the move of the mode. Without a heading observation the mode may slide
-    // about the vertical (nearly equal concentrations: the heading is uniform, its mode
-    // arbitrary), so only the tilt part of the move counts, taken from the body-frame "up" of
-    // the two modes, which a slide leaves unchanged: `up_post ≈ up_prior + up_prior × μ`, so
-    // `μ_⊥ = up_post × up_prior`.
-    let mu = if heading.is_some() {
-        Vector3::from(q4::to_rotation_vector(&q4::mul(
-            &q4::conj(&q_prior),
-            &q_post,
-        )))
-    } else {
-        let up_prior = q4::rotate_inverse(&q_prior, &UP);
-        let up_post = q4::rotate_inverse(&q_post, &UP);
-        Vector3::from(cross3(&up_post, &up_prior))
-    };
-    // At rest the gyroscope measures the bias directly (module `rest`), far better than the
-    // corrections can: they do not teach it then. Nor after a gyroscope gap in the period: the
-    // move of the mode then answers the carried rate's error, not the bias.
-    // Nor from an innovation the prior calls impossible (beyond OUTLIER standard deviations:
-    // a start far off, a wrong state set): the coupling is a linear-Gaussian model of small
-    // errors, and read literally the moves that such an innovation makes are a bias of degrees
-    // per second.
-    // An innovation or a move larger than LINEAR_MOVE is beyond that model too, whatever the
-    // prior's spread: the state is recovering from a large error, not tracking a bias.
-    let up_prior_b = q4::rotate_inverse(&q_prior, &UP);
-    let tilt_angle = tilt.as_ref().map_or(0.0, |(b, _)| {
-        norm3(&cross3(b, &up_prior_b)).atan2(vec3::dot3(b, &up_prior_b))
-    });
-    let heading_angle = heading.map_or(0.0, f64::abs);
-    let recovering = s.gap_in_period
-        || innovation > OUTLIER * OUTLIER
-        || mu.norm() > LINEAR_MOVE
-        || tilt_angle.max(heading_angle) > LINEAR_MOVE;
-    let learn = p.bias_time > 0.0 && s.rest_timer < p.rest_time && !recovering;
-    s.gap_in_period = false;
-    s.bias.correct(&lam_prior, &mu, &sigma_post, learn);
-    if recovering {
-        // what the recovery taught the orientation is not evidence about the bias: the
-        // coupling starts afresh, so that the next correction does not read the recovery's
-        // moves as the effect of a bias
-        s.bias.decouple();
-    }
-    s.bias.clip(p.bias_max);
-
-    // The heading correction turns the field's average with it.
-    if heading.is_some() {
-        let mut dw = q4::mul(&q_post, &q4::conj(&q_prior));
-        if dw[0] < 0.0 {
-            dw = dw.map(|v| -v);
+    // same cadence as `correct_every` nominal samples): the period's length and the time the
+    // sensors' samples covered in it (module `timing`).
+    if s.times.period >= c.correct_time - 0.5 * p.sample_time {
+        let (t, t_acc, t_mag) = s.times.take_period();
+        // 5.1 the prior: the state composed with the accumulated process noise
+        let prior_total = 4.0 * (s.omega[0] + s.omega[1] + s.omega[2]) + s.bias.pending.trace();
+        let prior = correction::prior(core, &s.omega, &mut s.bias)?;
+        // 5.2, 5.3 each sensor's evidence
+        let heading = s.mag.heading_evidence(p, t_mag, &prior.mode);
+        let mag_observed = heading.is_some();
+        let evidence = [s.accel.tilt_evidence(p, t_acc, &prior.mode), heading];
+        // 5.4 the health readout scores the innovations against the prior
+        let gravity_excess = s.accel.gravity_excess(p, t_acc);
+        s.health.gravity(t, gravity_excess);
+        let nu = s.health.correction(t, &prior.lam, &evidence);
+        let innovation = nu.largest();
+        // the stated uncertainty's averages (module `uncertainty`): the excess relative to g
+        let gravity_dev = gravity_excess.map(|x| x * p.acc_reject / p.gravity);
+        s.calib.correction(t, &nu, gravity_dev);
+        // 5.5 one exact Bayes product with every exponent
+        let update = correction::update(core, &prior, &evidence)?;
+        // 5.6 the bias from the move of the mode
+        let gap = std::mem::take(&mut s.gyro.gap_in_period);
+        let at_rest = s.rest.timer >= p.rest_time;
+        correction::learn_bias(p, &mut s.bias, &update, &evidence, innovation, gap, at_rest);
+        // 5.7 the field's average turned with the heading correction
+        if mag_observed {
+            s.mag.follow_correction(&prior.mode, &update.mode);
         }
-        s.mag.turn_heading(2.0 * dw[3].atan2(dw[0]));
+        s.omega = update.omega;
+        // 5.8 the gaps' variance shrinks as the state's does (a Bayes update scales every part
+        // of the prior's variance alike, to first order)
+        let post_total = 4.0 * (s.omega[0] + s.omega[1] + s.omega[2]);
+        if s.gyro.gap_stated > 0.0 && prior_total > 0.0 {
+            s.gyro.gap_stated *= (post_total / prior_total).clamp(0.0, 1.0);
+        }
     }
-    s.omega = [omega[0], omega[1], omega[2], omega[3]];
-    // the gaps' variance shrinks as the state's does (a Bayes update scales every part of the
-    // prior's variance alike, to first order)
-    let post_total = 4.0 * (omega[0] + omega[1] + omega[2]);
-    if s.gap_stated > 0.0 && prior_total > 0.0 {
-        s.gap_stated *= (post_total / prior_total).clamp(0.0, 1.0);
-    }
-    Ok(())
+    Ok((turn.dq, mag_used))
 }
 
 /// `e` with "sample k: " in front of its message.

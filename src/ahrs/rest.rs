@@ -13,6 +13,13 @@
 //! while at rest and adds, when the rest ends, the variance of a random walk's end about its
 //! mean over the phase (docs/accuracy.md, "The bias at rest").
 
+use nalgebra::Vector3;
+
+use super::bias::BiasState;
+use super::lowpass::Coeffs;
+use super::params::AhrsParams;
+use super::vec3::norm3;
+
 /// Length (s) of a block of the still phase: the time scale of the rest test's average.
 pub(super) const BLOCK_TIME: f64 = 0.5;
 
@@ -113,6 +120,87 @@ impl RestWindow {
         };
         let (m, o) = (h.mean(), self.origin.unwrap_or_default());
         Some(([o[0] + m[0], o[1] + m[1], o[2] + m[2]], var / h.n))
+    }
+}
+
+/// The rest detection's state in the AHRS (step 1 of the module `ahrs`): the gyroscope and
+/// the accelerometer low-passed (`REST_FILTER_TIME`) and band-limited (`REST_NOISE_TIME`),
+/// how long the sensor has been still, the samples of the still phase, and the time over
+/// which the bias's random walk has been held.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(super) struct Rest {
+    gyr_lp: [f64; 3],
+    acc_lp: [f64; 3],
+    /// The samples band-limited for the rest test (`REST_NOISE_TIME`).
+    gyr_fast: [f64; 3],
+    acc_fast: [f64; 3],
+    /// Seconds the sensor has been still.
+    pub(super) timer: f64,
+    /// The raw gyroscope samples of the current still phase.
+    window: RestWindow,
+    /// Seconds of the current rest (past `rest_time`) over which the bias's random walk is
+    /// held (module `gyro`).
+    pub(super) held: f64,
+}
+
+impl Rest {
+    /// The rest detection started from the first sample's raw `gyr` and `acc`.
+    pub(super) fn start(gyr: &[f64; 3], acc: &[f64; 3]) -> Rest {
+        Rest {
+            gyr_lp: *gyr,
+            acc_lp: *acc,
+            gyr_fast: *gyr,
+            acc_fast: *acc,
+            ..Rest::default()
+        }
+    }
+
+    /// One gyroscope sample `gyr` (and the accelerometer's `acc`, if usable) `h` seconds
+    /// after the previous one (step 1): the rest test and, after `rest_time` of stillness,
+    /// the bias measured at rest (a Kalman step of `bias`).
+    pub(super) fn step(
+        &mut self,
+        p: &AhrsParams,
+        c: &Coeffs,
+        h: f64,
+        gyr: &[f64; 3],
+        acc: Option<&[f64; 3]>,
+        bias: &mut BiasState,
+    ) {
+        // The deviations are taken from the samples band-limited to REST_NOISE_TIME, so that
+        // the test sees the same noise at every sample rate (a raw sample's noise grows with
+        // √rate: at 1 kHz a MEMS gyroscope's alone exceeds the threshold now and then, and no
+        // rest lasts).
+        let dt = p.sample_time;
+        let mut da = f64::INFINITY;
+        for ((lp, fast), x) in self
+            .gyr_lp
+            .iter_mut()
+            .zip(self.gyr_fast.iter_mut())
+            .zip(gyr)
+        {
+            *lp += c.rest_filter * (x - *lp);
+            *fast += c.rest_noise * (x - *fast);
+        }
+        if let Some(a) = acc {
+            for ((lp, fast), x) in self.acc_lp.iter_mut().zip(self.acc_fast.iter_mut()).zip(a) {
+                *lp += c.rest_filter * (x - *lp);
+                *fast += c.rest_noise * (x - *fast);
+            }
+            let (f, l) = (&self.acc_fast, &self.acc_lp);
+            da = norm3(&[f[0] - l[0], f[1] - l[1], f[2] - l[2]]);
+        }
+        let (f, g) = (&self.gyr_fast, &self.gyr_lp);
+        let dg = norm3(&[f[0] - g[0], f[1] - g[1], f[2] - g[2]]);
+        let still = dg < p.rest_gyro && da < p.rest_acc && norm3(g) < 2.0 * p.bias_max;
+        self.timer = if still { self.timer + h } else { 0.0 };
+        self.window.push(still, gyr, h);
+        if self.timer >= p.rest_time {
+            if let Some((mean, var)) = self.window.take(p.gyro_noise * p.gyro_noise / dt) {
+                bias.rest(&Vector3::from(mean), var);
+                bias.clip(p.bias_max);
+            }
+        }
     }
 }
 

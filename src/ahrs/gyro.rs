@@ -1,0 +1,160 @@
+//! The gyroscope in the AHRS (step 2 of the module `ahrs`): the exact turn of the state by the
+//! bias-corrected rate, the process noise accumulated, and gaps.
+//!
+//! - **The turn.** The state is turned by the body-frame increment of the bias-corrected rate,
+//!   `q ← q ⊗ exp((ω − b̂)·dt/2)`.
+//! - **The process noise** of the sample, `(gyro_noise² + (gyro_scale_noise·|ω − b̂|)²)·h`, and
+//!   what the bias's uncertainty adds through its coupling (module `bias`), accumulated until
+//!   the next correction; the bias's random walk, held over a rest (module `rest`).
+//! - **Gaps** (module `timing`): a sample covers one nominal period; the rest of a longer
+//!   interval is bridged with the mean of the last and this rate, a missing sample turned
+//!   with the last rate, and what that cannot know added to the process noise. When a gap
+//!   ends, the averages it turned by more than their noise restart (the sensors decide, from
+//!   [`Turn::gap_ended`]).
+
+use nalgebra::Matrix3;
+
+use super::bias::BiasState;
+use super::params::AhrsParams;
+use super::rest::Rest;
+use super::timing::GyroHold;
+use super::vec3::{norm3, scale3};
+use crate::filter::Core;
+use crate::quaternion::q4;
+
+/// The gyroscope's state in the AHRS besides the bias (module `bias`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(super) struct Gyro {
+    /// The last rate and the motion's statistics, for gaps (module `timing`).
+    hold: GyroHold,
+    /// The variance (rad² per axis) the current gyroscope gap has added by carrying the rate.
+    gap_var: f64,
+    /// Whether a gap came in the current correction period (its correction teaches the bias
+    /// nothing: the move of the mode answers the carried rate's error).
+    pub(super) gap_in_period: bool,
+    /// The variance (rad² per axis) that gaps and dropped samples have added and the
+    /// corrections have not yet taken out: physical, so the stated covariance carries it
+    /// unscaled (module `uncertainty`).
+    pub(super) gap_stated: f64,
+}
+
+/// What a gyroscope step gives the other sensors' steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Turn {
+    /// The body-frame increment the state was turned by (unit quaternion).
+    pub(super) dq: [f64; 4],
+    /// The turn the latency compensation extrapolates: the rate over one nominal period
+    /// (rotation vector, rad).
+    pub(super) w_lead: [f64; 3],
+    /// The bias-corrected rate's norm (rad/s).
+    pub(super) rate: f64,
+    /// When a gap ended with this sample: the variance (rad², of the turn vector) by which
+    /// the carried rate turned the averages over it.
+    pub(super) gap_ended: Option<f64>,
+}
+
+impl Gyro {
+    /// One sample `h` seconds after the previous one (step 2), `gyr` (rad/s; `None`: a gap,
+    /// `missing` seconds since the last sample before this one): turns `core`, accumulates the
+    /// process noise and predicts the bias (`bias`; its random walk held over a rest of
+    /// `rest`).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn step(
+        &mut self,
+        p: &AhrsParams,
+        core: &mut Core<4>,
+        bias: &mut BiasState,
+        rest: &mut Rest,
+        missing: f64,
+        h: f64,
+        gyr: Option<&[f64; 3]>,
+    ) -> Turn {
+        let dt = p.sample_time;
+        // A sample covers one nominal period; the rest of a longer interval (dropped samples)
+        // is bridged with the mean of the last and this rate, a missing sample with the last
+        // rate (module `timing`).
+        let b = bias.b;
+        let (omega, bridged, held) = match gyr {
+            Some(g) => {
+                let omega = [g[0] - b[0], g[1] - b[1], g[2] - b[2]];
+                if h > 1.5 * dt {
+                    let bridge = self.hold.bridge(&omega);
+                    (omega, Some((bridge, h - dt)), false)
+                } else {
+                    (omega, None, false)
+                }
+            }
+            None => (self.hold.rate(), None, true),
+        };
+        let covered = match (gyr.is_some(), bridged) {
+            (false, _) => 0.0,
+            (true, Some(_)) => dt,
+            (true, None) => h,
+        };
+        let w = scale3(&omega, if held { h } else { covered });
+        let rate = norm3(&omega);
+        let mut dq = q4::from_rotation_vector(&w);
+        if let Some((bridge, u)) = bridged {
+            dq = q4::mul(&q4::from_rotation_vector(&scale3(&bridge, u)), &dq);
+        }
+        core.rotate(&dq);
+        // The carried rate's error grows with the whole stretch without a gyroscope sample, not
+        // sample by sample: add what this step adds to the stretch's variance.
+        let extra = if held {
+            let gap = missing + h;
+            self.hold.extrapolation_variance(gap, true)
+                - self.hold.extrapolation_variance(gap - h, true)
+        } else {
+            self.hold.extrapolation_variance(h - covered, false)
+        };
+        let mut gap_ended = None;
+        if held {
+            self.gap_var += extra;
+            self.gap_in_period = true;
+        } else if self.gap_var > 0.0 {
+            // the gap is over: the averages it turned by more than their noise restart
+            gap_ended = Some(3.0 * self.gap_var);
+            self.gap_var = 0.0;
+        }
+        if let Some(g) = gyr {
+            self.hold.push(&[g[0] - b[0], g[1] - b[1], g[2] - b[2]], h);
+        }
+        // the turn the latency compensation extrapolates: the rate over one nominal period
+        let w_lead = scale3(&omega, dt);
+        let scale = p.gyro_scale_noise * rate;
+        // at most 1 rad² per sample: a wider noise is uniform for all purposes
+        let q = ((p.gyro_noise * p.gyro_noise + scale * scale) * h + extra).min(1.0);
+        self.gap_stated += extra;
+        // the bias's random walk: variance per second
+        let walk = if p.bias_time > 0.0 {
+            p.bias_std * p.bias_std / p.bias_time
+        } else {
+            0.0
+        };
+        let mut drift = walk * h;
+        // Over a rest the bias is one constant, which the rest's samples measure (module
+        // `rest`): its random walk is held, and added when the rest ends as the variance of a
+        // random walk's end about its mean over the phase (a third of the walk's variance over
+        // the phase).
+        if rest.timer >= p.rest_time {
+            rest.held += h;
+            drift = 0.0;
+        } else if rest.held > 0.0 {
+            drift += walk * rest.held / 3.0;
+            rest.held = 0.0;
+        }
+        let r = q4::to_matrix(&dq);
+        bias.predict(&Matrix3::from_fn(|i, j| r[i][j]), h, q, drift);
+        // the estimate is clipped to ±bias_max: its variance need not grow beyond (2·bias_max)²
+        let cap = 3.0 * 4.0 * p.bias_max * p.bias_max;
+        if bias.p.trace() > cap {
+            bias.p *= cap / bias.p.trace();
+        }
+        Turn {
+            dq,
+            w_lead,
+            rate,
+            gap_ended,
+        }
+    }
+}
