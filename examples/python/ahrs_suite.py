@@ -114,6 +114,55 @@ def scenarios():
                 dict(attach_time=30.0), SETTLE))
     out.append(("bursts", "linear-acceleration bursts (0.3/s, 2-8 m/s^2)",
                 dict(burst_rate=0.3), SETTLE))
+    return out + mechanism_scenarios()
+
+
+# issue 34's scenarios (item 7): each a physical choice, documented in the module docstring
+LEVER_DIR = np.array([0.6, -0.48, 0.64])  # a unit vector, body frame
+ACC_OFFSET = (0.15, -0.10, 0.20)  # m/s², per axis
+ACC_SCALE = (0.015, -0.010, 0.020)  # per axis
+GYRO_SCALE = (0.002, -0.002, 0.002)  # per axis
+VOLUME = dict(pos_amp=(1.5, 1.5, 0.3), field_var=6.0 * DEG)
+REJECTION = dict(omega_max=0.5, yaw_spin_time=(6.0, 57.0), yaw_spin_ramp=2.0,
+                 attach_time=10.0, attach_end=55.0, attach_field=30.0)
+
+
+def mechanism_scenarios():
+    """Issue 34's scenarios, after the suite's first ones (the same table format)."""
+    out = []
+    for r in (0.1, 0.3):
+        out.append((f"lever{r:g}", f"IMU {r:g} m from the rotation centre",
+                    dict(lever_arm=tuple(r * LEVER_DIR)), SETTLE))
+    out.append(("lever0.2_spin4", "IMU 0.2 m from the centre, spinning at 4 rad/s",
+                dict(lever_arm=tuple(0.2 * LEVER_DIR), spin_rate=4.0, omega_max=1.0), SETTLE))
+    out.append(("acc_offset", "accelerometer offset (0.15, -0.10, 0.20) m/s^2",
+                dict(acc_offset=ACC_OFFSET), SETTLE))
+    out.append(("acc_scale", "accelerometer scale error (+1.5, -1.0, +2.0) %",
+                dict(acc_scale=ACC_SCALE), SETTLE))
+    out.append(("acc_offset_scale", "accelerometer offset and scale error together",
+                dict(acc_offset=ACC_OFFSET, acc_scale=ACC_SCALE), SETTLE))
+    out.append(("field_volume", "moving in a 3 m volume, local field turned by up to 6 deg",
+                dict(VOLUME), SETTLE))
+    out.append(("field_offset", "local field turned 1.5 deg in heading, constant (unobservable)",
+                dict(field_offset=(0.0, 0.0, 1.5 * DEG)), SETTLE))
+    for w in (110, 180):
+        out.append((f"reject{w}", f"spinning {w} deg/s about the vertical, 30 uT "
+                    "body-fixed magnet for 45 s", dict(REJECTION, yaw_spin=w * DEG), SETTLE))
+    out.append(("reject180_gscale", "as reject180, gyro scale error 0.2 %",
+                dict(REJECTION, yaw_spin=180 * DEG, gyro_scale=GYRO_SCALE), SETTLE))
+    out.append(("reject180_nomag", "as reject180 without the magnet",
+                dict(REJECTION, yaw_spin=180 * DEG, attach_time=None, attach_end=None), SETTLE))
+    for d in (1, 5):
+        out.append((f"drop{d}", f"{d} % of the samples dropped, timestamps given",
+                    dict(drop_rate=d / 100.0), SETTLE))
+    out.append(("jitter10", "sampling instants jittered +-10 % of the period, timestamps given",
+                dict(time_jitter=0.1), SETTLE))
+    out.append(("lost_mag20", "magnetometer rows NaN from 25 s to 45 s",
+                dict(mag_lost=(25.0, 45.0)), SETTLE))
+    out.append(("lost_accmag10", "accelerometer and magnetometer rows NaN from 30 s to 40 s",
+                dict(acc_lost=(30.0, 40.0), mag_lost=(30.0, 40.0)), SETTLE))
+    out.append(("start_flip180", "field reversed in heading for the first 0.5 s (a start 180 "
+                "deg wrong)", dict(mag_flip_until=0.5), SETTLE))
     return out
 
 
@@ -122,9 +171,12 @@ def config_for(overrides, seed, quick):
     if quick:
         scale = QUICK_DURATION / kw["duration"]
         kw["duration"] = QUICK_DURATION
-        for k in ("pass_time", "attach_time"):
+        for k in ("pass_time", "attach_time", "attach_end"):
             if kw.get(k) is not None:
                 kw[k] *= scale
+        for k in ("yaw_spin_time", "acc_lost", "mag_lost"):  # event windows
+            if kw.get(k) is not None:
+                kw[k] = tuple(scale * x for x in kw[k])
     return imu_sim.SimConfig(**kw)
 
 
@@ -136,7 +188,8 @@ def run_bingham(trial):
     import bingham
     f = bingham.Ahrs(trial["Ts"])
     t0 = time.perf_counter()
-    q, spread = f.update_batch(trial["gyr"], trial["acc"], trial["mag"], spread=True)
+    q, spread = f.update_batch(trial["gyr"], trial["acc"], trial["mag"], spread=True,
+                               time=trial.get("time"))
     seconds = time.perf_counter() - t0
     return np.asarray(q, dtype=float), np.asarray(spread, dtype=float), f.gyro_bias(), seconds
 
@@ -149,14 +202,55 @@ def vqf_bias(trial):
     return np.asarray(out["bias"][-1], dtype=float)
 
 
+def peer_trial(trial):
+    """The samples as VQF and Madgwick can take them. Both skip a sensor's correction on a
+    sample of [0 0 0] (VQF's ``updateAcc``/``updateMag`` ignore it; the ``ahrs`` package's
+    Madgwick integrates the gyroscope alone), while a NaN row spoils their state for good: a
+    lost sample (NaN row) becomes a zero row, "skip". Neither takes timestamps (VQF's period
+    is fixed at construction): with ``time``, VQF is given the gyroscope scaled by
+    Δt_k / Ts, so that its fixed-step integration turns by exactly exp(gyr_k·Δt_k) (the
+    corrections keep their nominal time constants), and Madgwick is run sample by sample with
+    its ``dt`` argument (:func:`run_madgwick_timed`)."""
+    out = dict(trial)
+    for k in ("acc", "mag"):
+        if np.isnan(trial[k]).any():
+            out[k] = np.ascontiguousarray(np.nan_to_num(trial[k], nan=0.0))
+    return out
+
+
+def run_madgwick_timed(trial):
+    """``broad.run_madgwick`` with a time step per sample (the ``ahrs`` package's
+    ``updateMARG(..., dt=...)``), started as its batch mode is (``ecompass`` of the first
+    sample)."""
+    import ahrs
+    from ahrs.common.orientation import ecompass
+    t0 = time.perf_counter()
+    f = ahrs.filters.Madgwick(frequency=trial["fs"], gain=0.12)
+    gyr, acc, mag, t = trial["gyr"], trial["acc"], trial["mag"], trial["time"]
+    q = np.zeros((len(t), 4))
+    q[0] = ecompass(acc[0], mag[0], frame="NED", representation="quaternion")
+    for k in range(1, len(t)):
+        q[k] = f.updateMARG(q[k - 1], gyr[k], acc[k], mag[k], dt=t[k] - t[k - 1])
+    seconds = time.perf_counter() - t0
+    return broad.qmul(broad.NED_TO_ENU, q), seconds
+
+
 def run_filter(name, trial):
     """(q, spread or None, bias estimate or None, seconds)."""
     if name == "bingham":
         return run_bingham(trial)
+    trial = peer_trial(trial)
+    timed = trial.get("time") is not None
     if name == "vqf":
+        if timed:
+            dt = np.diff(trial["time"], prepend=trial["time"][0] - trial["Ts"])
+            trial = dict(trial, gyr=np.ascontiguousarray(trial["gyr"] * (dt / trial["Ts"])[:, None]))
         q, _, seconds = broad.run_vqf(trial)
         return np.asarray(q, dtype=float), None, vqf_bias(trial), seconds
-    q, _, seconds = broad.run_madgwick(trial)
+    if timed:
+        q, seconds = run_madgwick_timed(trial)
+    else:
+        q, _, seconds = broad.run_madgwick(trial)
     return np.asarray(q, dtype=float), None, None, seconds
 
 
@@ -198,15 +292,44 @@ def segments(err, spread, fs, start):
             np.degrees(np.sqrt(np.mean(s * s, axis=1))))
 
 
+def settle_time(err, t, tol):
+    """The time from which the error stays within ``tol`` to the end (0 if it always is; the
+    last sample's time if it ends above)."""
+    bad = np.nonzero(~(err <= tol))[0]
+    if not len(bad):
+        return 0.0
+    return float(t[min(bad[-1] + 1, len(t) - 1)])
+
+
 # ---- one scenario -----------------------------------------------------------------------------
 
 
 def group_of(name):
     """The scenario family (table blocks): bias, rate, spin, latency, magnet, bursts."""
-    for g in ("bias", "rate", "spin4_latency", "spin", "latency", "magnet", "bursts"):
+    for g in ("bias", "rate", "spin4_latency", "spin", "latency", "magnet", "bursts", "lever",
+              "acc_", "field", "reject", "drop", "jitter", "lost", "start"):
         if name.startswith(g):
-            return "latency" if g == "spin4_latency" else g
+            return {"spin4_latency": "latency", "acc_": "acc", "drop": "timing",
+                    "jitter": "timing"}.get(g, g)
     return name
+
+
+# the groups of issue 34's scenarios (``--group issue34`` runs them all)
+MECHANISM_GROUPS = ("lever", "acc", "field", "reject", "timing", "lost", "start")
+
+
+def select_groups(todo, spec):
+    """The scenarios of ``todo`` whose group (or name prefix) is in the comma-separated
+    ``spec``; ``issue34`` stands for every group of :data:`MECHANISM_GROUPS`. (selected, the
+    unknown entries)."""
+    wanted = [g.strip() for g in spec.split(",") if g.strip()]
+    expanded = []
+    for g in wanted:
+        expanded += list(MECHANISM_GROUPS) if g == "issue34" else [g]
+    pick = [s for s in todo if any(group_of(s[0]) == g or s[0].startswith(g) for g in expanded)]
+    unknown = [g for g in expanded
+               if not any(group_of(s[0]) == g or s[0].startswith(g) for s in todo)]
+    return pick, unknown
 
 
 def evaluate(name, desc, overrides, settle, filters, seed, quick):
@@ -215,6 +338,7 @@ def evaluate(name, desc, overrides, settle, filters, seed, quick):
     sim = imu_sim.simulate(cfg)
     sim_seconds = time.perf_counter() - t0
     trial = {k: sim[k] for k in ("gyr", "acc", "mag", "fs", "Ts")}
+    trial["time"] = sim["t"] if sim["timed"] else None
     truth_q, truth_b = sim["truth"]["quat"], sim["truth"]["bias"]
     n = len(truth_q)
     start = int(np.searchsorted(sim["t"], settle - 1e-9))
@@ -233,6 +357,7 @@ def evaluate(name, desc, overrides, settle, filters, seed, quick):
         err = broad.errors(q, truth_q)
         r = {m: math.degrees(broad.rms(err[m][start:])) for m in METRICS}
         r["us_per_sample"] = seconds / n * 1e6
+        r["within_5deg_after_s"] = settle_time(err["total"], sim["t"], 5.0 * DEG)
         if bias is not None:
             d = np.linalg.norm(bias - truth_b)
             r["bias_estimate_rad_s"] = bias.tolist()
@@ -297,6 +422,20 @@ def print_table(results, filters):
     print()
 
 
+def print_settling(results, filters):
+    """For the ``start`` group (a start 180° wrong): per filter the time from which its total
+    error stays within 5°."""
+    rows = [(n, r) for n, r in results.items() if r["group"] == "start"]
+    if not rows:
+        return
+    print("time from which the total error stays within 5 deg (s)")
+    print(f"{'scenario':<18} | " + " ".join(f"{SHORT[f]:>6}" for f in filters))
+    for name, res in rows:
+        print(f"{name:<18} | " + " ".join(
+            fmt(res["filters"].get(f, {}).get("within_5deg_after_s"), "{:6.1f}") for f in filters))
+    print()
+
+
 def over_seeds(todo, filters, seed, k, quick, first):
     """The bias scenarios of ``todo`` with the seeds ``seed`` … ``seed + k − 1`` (``first`` holds
     the runs with ``seed``): per scenario and filter the total error of every seed, their mean,
@@ -339,13 +478,21 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=SEED, help=f"simulation seed (default {SEED})")
     ap.add_argument("--seeds", type=int, default=1, metavar="K",
                     help="also run the bias scenarios with K-1 more seeds (default 1: none)")
+    ap.add_argument("--group", metavar="G,...",
+                    help="only the scenarios of these groups or name prefixes (e.g. lever,timing; "
+                         "issue34: " + ",".join(MECHANISM_GROUPS) + "); see --list")
     ap.add_argument("--list", action="store_true", help="list the scenarios and exit")
     args = ap.parse_args(argv)
 
     todo = scenarios()
+    if args.group:
+        todo, unknown = select_groups(todo, args.group)
+        if unknown:
+            print(f"unknown group(s): {', '.join(unknown)} (see --list)")
+            return 2
     if args.list:
         for name, desc, _, settle in todo:
-            print(f"{name:<18} {desc} (settling {settle:g} s)")
+            print(f"{name:<24} {group_of(name):<10} {desc} (settling {settle:g} s)")
         return 0
     if args.only:
         wanted = [s.strip() for s in args.only.split(",") if s.strip()]
@@ -382,6 +529,7 @@ def main(argv=None):
     wall = time.perf_counter() - t0
 
     print_table(results, filters)
+    print_settling(results, filters)
     summary = {"wall_seconds": wall}
     if "bingham" in filters:
         print("Bing e/spr: RMS of Bingham's total error / RMS of its predicted spread "
