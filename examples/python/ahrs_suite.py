@@ -2,8 +2,8 @@
 """The simulated-IMU suite (issue 20): the Bingham AHRS, VQF and Madgwick on the same simulated
 samples with known truth (``imu_sim.py``), one scenario per effect.
 
-    usage: python3 examples/python/ahrs_suite.py [--only NAME,...] [--quick] [--json OUT.json]
-                                                 [--seed N] [--seeds K] [--list]
+    usage: python3 examples/python/ahrs_suite.py [--only NAME,...] [--group G,...] [--quick]
+                                                 [--json OUT.json] [--seed N] [--seeds K] [--list]
 
 Filters (each with its defaults, causal, on the same samples):
 
@@ -12,6 +12,13 @@ Filters (each with its defaults, causal, on the same samples):
   ``bias`` output of ``updateBatch``, rad/s) from a second, identical VQF run;
 * Madgwick: ``broad.run_madgwick`` (``ahrs`` package, gain 0.12, earth frame turned to ENU); it
   has no bias estimate.
+
+Lost samples and timestamps (the ``timing`` and ``lost`` scenarios): Bingham gets the NaN rows
+as they are and the timestamps (``update_batch(..., time=t)``). The peers get their best
+equivalent (:func:`peer_trial`): a NaN row becomes [0 0 0], which VQF and Madgwick both skip
+(that sensor's correction is left out of the sample; a NaN would spoil their state for good);
+VQF, whose period is fixed, gets the gyroscope scaled by Δt_k/Ts (its integration then turns by
+exactly exp(gyr_k·Δt_k)); Madgwick is run sample by sample with its ``dt`` argument.
 
 Metric: BROAD's (``broad.errors``: total, heading, inclination error) against the simulator's
 truth; per scenario and filter the RMS over the samples from the settling time on (10 s unless
@@ -41,7 +48,52 @@ gyro noise 0.005 rad/s, accelerometer 0.05 m/s², magnetometer 0.5 µT per sampl
 * ``magnet_attached``: a magnet attached from 30 s on (20 µT constant in the sensor frame);
 * ``bursts``: linear-acceleration bursts (0.3 per second, 2–8 m/s² peaks, 0.3–1.5 s each).
 
-``--quick`` runs every scenario for 25 s (events at 12.5 s instead of 30 s) as a smoke test.
+Issue 34's scenarios (item 7: what the mechanisms need; ``--group issue34`` runs them alone),
+each a physical choice, the base scenario (bias 0.2 °/s, 2 s rest) plus one effect:
+
+* ``lever`` group: the IMU mounted at r from the rotation centre, r = 0.1 and 0.3 m along the
+  body direction (0.6, −0.48, 0.64) (``lever0.1``, ``lever0.3``: a sensor on a limb or a
+  handheld device; the accelerometer feels ω̇×r + ω×(ω×r), up to a few m/s² at 3 rad/s);
+  ``lever0.2_spin4``: 0.2 m during spinning at 4 rad/s (+ motion up to 1 rad/s), a steady
+  centripetal acceleration of about 3 m/s² (a sensor off the axis of a rotating body);
+* ``acc`` group: an uncalibrated accelerometer, ``acc_offset`` (0.15, −0.10, 0.20) m/s² per axis,
+  ``acc_scale`` (+1.5, −1.0, +2.0) % per axis, ``acc_offset_scale`` both (typical MEMS
+  turn-on offsets and sensitivity tolerances; an offset of 0.15 m/s² is a 0.9° tilt at rest
+  that no filter can see without motion);
+* ``field`` group: ``field_volume``: the rotation centre wanders slowly through a volume
+  (±1.5 m horizontally, ±0.3 m vertically, periods of 30–200 s) in which the local field is
+  turned from the reference by a smooth function of position, up to 6° (about 1–6° over the
+  run; correlated over tens of seconds, as measured in indoor motion-capture volumes);
+  ``field_offset``: the local field turned by a constant 1.5° about the vertical (a heading
+  offset no IMU can observe: every filter's heading is 1.5° off at best);
+* ``reject`` group: spinning about the world vertical at 110 or 180 °/s (``reject110``,
+  ``reject180``; from 6 s to 57 s, half-cosine ramps of 2 s, with a wobble up to 0.5 rad/s)
+  with a 30 µT magnet fixed to the sensor from 10 s to 55 s (45 s): the measured field's norm
+  swings at the spin rate, so a filter rejects the magnetometer or averages the disturbance
+  out over the rotation; ``reject180_gscale`` adds a gyroscope scale error of 0.2 % per axis
+  (0.36 °/s of heading drift at 180 °/s while the field is rejected); ``reject180_nomag`` is the
+  same spin without the magnet (the reference);
+* ``timing`` group: ``drop1``, ``drop5``: 1 % and 5 % of the samples (packets: all sensors)
+  dropped at random, the rest with their timestamps; ``jitter10``: the sampling instants
+  jittered uniformly by ±10 % of the period, with their timestamps (the gyroscope integrating
+  over the true interval);
+* ``lost`` group: ``lost_mag20``: the magnetometer's rows NaN from 25 s to 45 s;
+  ``lost_accmag10``: the accelerometer's and magnetometer's rows NaN from 30 s to 40 s;
+* ``start`` group: ``start_flip180``: for the first 0.5 s (at rest) the local field is turned
+  180° about the vertical (same norm and dip), then it is the reference field: every filter
+  initializes its heading from its first samples, so each starts 180° wrong in heading, from
+  the same samples. This is the start that is fair to all three: each gets the same wrong
+  evidence through its own initialization, where a forced state would need each filter's own
+  way in (Bingham's ``set_state`` with some confidence, Madgwick's ``q0``, VQF's internal
+  ``state`` with its fast initial heading gain ``kMagInit``), each with its own choices.
+  Besides the RMS errors the suite prints, per filter, the time from which the total error
+  stays within 5° (``within_5deg_after_s`` in the JSON, kept for every scenario).
+
+``--quick`` runs every scenario for 25 s (events at 12.5 s instead of 30 s; every event time
+and window scaled by 25/60) as a smoke test. ``--group G,...`` runs the scenarios of these
+groups (``bias``, ``rate``, ``spin``, ``latency``, ``magnet``, ``bursts``, ``lever``, ``acc``,
+``field``, ``reject``, ``timing``, ``lost``, ``start``; ``issue34`` for the last seven) or
+name prefixes; ``--list`` shows each scenario's group.
 ``--seeds K`` (K > 1) also runs the nine bias scenarios with the seeds N+1 … N+K−1 and prints, per
 scenario, each filter's total error averaged over the K seeds and on how many seeds Bingham's is
 at or below VQF's: one seed is one noise realization and one motion, and the filters' ranking

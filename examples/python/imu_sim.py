@@ -12,7 +12,8 @@ the sensor (body) frame to the world frame, which is ENU (x east, y north, z up)
 rotation matrix, so a world vector v reads R(q)ᵀ·v in the sensor frame. Units: s, rad, rad/s,
 m/s², µT. Every random draw comes from ``numpy.random.SeedSequence(seed)`` split into
 independent streams (motion, initial orientation, bursts, passing magnet, attached magnet, the
-noise of each sensor), so switching one model on or off leaves the others' draws unchanged, and
+noise of each sensor; then, appended so that the earlier ones are unchanged: position, field,
+timing jitter, drops), so switching one model on or off leaves the others' draws unchanged, and
 the motion does not depend on the sample rate: the same ``seed`` at 100 Hz and at 1 kHz is the
 same trajectory sampled differently (with its own noise realization).
 
@@ -31,6 +32,17 @@ Models and defaults (the fields of :class:`SimConfig`):
     until ``rest``, then rises as a half cosine over ``ramp`` (1 s) to 1; with rest = 0, e ≡ 1
     (the motion is already under way at t = 0, also before it).
   ``omega_fn`` (a callable t[n] → n×3) replaces this model altogether (used by the tests).
+  - a spin about the *world* vertical (``yaw_spin``, rad/s, default 0 = off): the orientation is
+    q(t) = exp(ẑ·θ(t)) ⊗ q_b(t), q_b the body-rate motion above and θ̇ = W(t) = ``yaw_spin``
+    rising by a half cosine over ``yaw_spin_ramp`` (2 s) from ``yaw_spin_time[0]`` and falling
+    the same way from ``yaw_spin_time[1]`` (θ in closed form); the body rate is then
+    ω = ω_b + R(q_b)ᵀ·ẑ·W (a turntable or a person turning on the spot, wobbling by ω_b).
+* **Position** (``pos_amp``, m per world axis, default 0 = the rotation centre stays put): the
+  rotation centre wanders through a volume, per axis a sum of ``pos_tones`` (3) sinusoids of
+  frequencies uniform in ``pos_band`` (0.005–0.03 Hz: periods of 30–200 s, a slow walk about a
+  motion-capture volume), amplitudes uniform in [0.5, 1], random phases, scaled so that
+  max |p_i| over the run is ``pos_amp[i]``. Its acceleration p̈ (closed form) is part of the
+  linear acceleration a(t) the accelerometer sees (at most a few cm/s² with these bands).
 * **Orientation** (truth): q(0) has a uniform random heading and a tilt uniform in
   [0, ``tilt_max``] (20°) about a random horizontal axis (``q0`` overrides it); q(t) integrates
   q̇ = ½ q ⊗ (0, ω) on a fine grid (step ≤ ``fine_step`` = 1 ms, an integer fraction of the
@@ -38,23 +50,46 @@ Models and defaults (the fields of :class:`SimConfig`):
   θ = h/2·(ω₁ + ω₂) + √3/12·h²·(ω₁ × ω₂), q ← q ⊗ exp(θ) (local error O(h⁵); the step
   increments are composed by a parallel prefix product). Orientations between grid points
   (the magnetometer latency) are slerped.
-* **Gyroscope**: gyr_k = ω̄_k + b + n, where ω̄_k is the mean body rate over (t_{k−1}, t_k]:
+* **Gyroscope**: gyr_k = (1 + s)∘ω̄_k + b + n, where ω̄_k is the mean body rate over (t_{k−1}, t_k]:
   exactly the rotation vector of q(t_{k−1})⁻¹ ⊗ q(t_k) divided by Ts, so that a filter that turns
   its estimate by exp(gyr_k·Ts) on sample k (VQF, Madgwick, the Bingham AHRS) reproduces the truth
   from noise-free, bias-free samples; it differs from the instantaneous ω(t_k − Ts/2) by
   O(Ts²) (``truth["omega"]`` holds the instantaneous ω(t_k)). b = ``gyro_bias`` (constant
-  3-vector, rad/s, default 0); n white Gaussian, ``gyro_noise`` (0.005 rad/s) per axis.
-* **Accelerometer**: the specific force in the body frame, acc_k = R(q(t_k))ᵀ·(a(t_k) + (0, 0, g))
-  + n, with g = ``gravity`` (9.81 m/s², so +g up at rest), a(t) the linear acceleration (world
-  frame) and n white, ``acc_noise`` (0.05 m/s²) per axis. The burst model for a(t): bursts
+  3-vector, rad/s, default 0); s = ``gyro_scale`` (per-axis scale error, default 0; a 0.2 %
+  error turns 180 °/s into a 0.36 °/s drift); n white Gaussian, ``gyro_noise`` (0.005 rad/s)
+  per axis.
+* **Accelerometer**: the specific force in the body frame,
+  acc_k = (1 + s_a)∘(R(q(t_k))ᵀ·(a(t_k) + (0, 0, g)) + ω̇×r + ω×(ω×r)) + o + n, with
+  g = ``gravity`` (9.81 m/s², so +g up at rest), a(t) the linear acceleration of the rotation
+  centre (world frame: bursts + p̈), n white, ``acc_noise`` (0.05 m/s²) per axis, and:
+  - r = ``lever_arm`` (m, body frame, default 0): the accelerometer sits at r from the centre
+    of rotation, so it also feels the tangential ω̇×r and centripetal ω×(ω×r) accelerations
+    (ω, ω̇ the body rate and its derivative at t_k; ω̇ of the analytic base motion by a central
+    difference of 0.1 ms, the spin about the vertical in closed form); truth ``acc_lever``;
+  - o = ``acc_offset`` (m/s², per axis, default 0) and s_a = ``acc_scale`` (per-axis scale
+    error, default 0): an uncalibrated accelerometer (typical MEMS: 0.1–0.2 m/s², 1–2 %).
+  The burst model for a(t): bursts
   arrive as a Poisson process of rate ``burst_rate`` (per second, default 0 = none) from
   ``rest`` on; each has a duration uniform in ``burst_dur`` (0.3–1.5 s), a peak magnitude uniform
   in ``burst_amp`` (2–8 m/s²), a uniformly random world direction u, and the profile
   a(t) = A·u·sin(2πs)·sin²(πs)/c (s = (t − t₀)/duration ∈ [0, 1], c normalizing the peak to A):
   a push and a brake, so the velocity returns to zero after each burst.
-* **Magnetometer**: mag_k = R(q(t_k − L))ᵀ·(m_E + d_pass(t_k − L)) + d_att(t_k − L) + n, µT:
-  - m_E, the Earth field: magnitude ``mag_field`` (50 µT), dip ``mag_dip`` (60°, downward, north
-    in +y): m_E = |m|·(0, cos dip, −sin dip);
+* **Magnetometer**: mag_k = R(q(t_k − L))ᵀ·(m_loc(t_k − L) + d_pass(t_k − L)) + d_att(t_k − L)
+  + n, µT:
+  - m_E, the Earth field (the reference that defines north): magnitude ``mag_field`` (50 µT),
+    dip ``mag_dip`` (60°, downward, north in +y): m_E = |m|·(0, cos dip, −sin dip);
+  - m_loc = R(exp(δ))·m_E, the local field: the reference turned by the rotation vector
+    δ = ``field_offset`` (constant, rad, default 0: a local offset no IMU can observe) + δ_v(p),
+    a smooth function of the position p(t) (``field_var`` > 0, default 0 = off): per component a
+    sum of ``field_modes`` (4) plane waves c·sin(k·p + φ), k of random direction and wavelength
+    uniform in ``field_wavelength`` (3–8 m), c normal, scaled so that max |δ_v| along the run's
+    trajectory is ``field_var`` (as steel in floors and walls bends the field of an indoor
+    motion-capture volume by a few degrees; with the default position bands the offset is
+    correlated over tens of seconds). Its norm is unchanged, its dip and heading move. Truth
+    ``field_rotation`` (δ at each sample);
+  - ``mag_flip_until`` (s, default None): before it, m_loc is turned 180° about the vertical (the
+    same norm and dip, heading reversed): a filter that initializes its heading from its first
+    samples starts 180° wrong;
   - L = ``mag_latency`` (s, default 0): the magnetometer sample k shows the field at t_k − L,
     the orientation there slerped between fine-grid points (latency also delays the
     disturbances: the whole channel lags);
@@ -66,15 +101,30 @@ Models and defaults (the fields of :class:`SimConfig`):
     its magnitude is at most 2K/(1 + s²)^{3/2} (below 1 % of the peak for |s| > 5.8);
   - d_att, a magnet attached to the sensor (``attach_time``, default None = off): a constant
     body-frame field of magnitude ``attach_field`` (20 µT) and random direction from
-    ``attach_time`` on, switched on by a half cosine over ``attach_ramp`` (0.5 s);
+    ``attach_time`` on, switched on by a half cosine over ``attach_ramp`` (0.5 s), and off the
+    same way from ``attach_end`` (default None: never);
   - n white, ``mag_noise`` (0.5 µT) per axis.
 * **Noise levels** are per-sample standard deviations at ``noise_ref_rate`` (100 Hz); at another
   rate f they are scaled by √(f / noise_ref_rate) — a constant noise density, so the same
   sensor sampled faster has the same angle random walk (``noise_ref_rate=None``: no scaling).
+* **The stream** (defaults: every sample, at t_k = k·Ts):
+  - ``time_jitter`` J (fraction of Ts, < 0.5): the sampling instants are t_k = (k + J·u_k)·Ts,
+    u_k uniform in [−1, 1] (u_0 = 0); every sensor samples at t_k (orientations off the fine
+    grid by one more Magnus step from the grid point below) and the gyroscope's sample is the
+    mean rate over the true interval (t_{k−1}, t_k]; the result's ``t`` holds the t_k, which a
+    filter gets as timestamps;
+  - ``drop_rate`` (fraction): each sample (all sensors together: a lost packet) is dropped
+    independently with this probability (never the first); the sample after a drop still
+    integrates only its own period (the dropped interval's turn is not in any sample);
+  - ``acc_lost``, ``mag_lost`` ((start, end) s, default None): that sensor's rows are NaN for
+    start ≤ t < end (a sensor that stops; the other sensors go on).
+  ``sim["timed"]`` is True when the times are not k·Ts (jitter or drops).
 
 Truth (``sim["truth"]``): ``quat`` (n×4, w ≥ 0), ``bias`` (3), ``omega`` (instantaneous ω(t_k)),
-``gyr_clean`` (ω̄_k), ``lin_acc`` (a(t_k), world), ``quat_mag`` (q(t_k − L)), ``mag_earth`` (3),
-``mag_pass`` (d_pass(t_k − L), world), ``mag_attached`` (d_att(t_k − L), body).
+``gyr_clean`` (ω̄_k, before the scale error), ``lin_acc`` (a(t_k), world), ``quat_mag``
+(q(t_k − L)), ``mag_earth`` (3), ``mag_pass`` (d_pass(t_k − L), world), ``mag_attached``
+(d_att(t_k − L), body), ``acc_lever`` (ω̇×r + ω×(ω×r), body), ``position`` (p(t_k), world),
+``field_rotation`` (δ(t_k − L)).
 """
 
 from __future__ import annotations
