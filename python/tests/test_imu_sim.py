@@ -327,7 +327,8 @@ def test_reversed_start_field():
 def test_calibration_errors():
     kw = dict(duration=20.0, seed=2)
     plain = simulate(SimConfig(**kw))
-    off, sc, gs = np.array([0.15, -0.1, 0.2]), np.array([0.015, -0.01, 0.02]), np.array([2e-3, 0, -1e-3])
+    off, sc = np.array([0.15, -0.1, 0.2]), np.array([0.015, -0.01, 0.02])
+    gs = np.array([2e-3, 0.0, -1e-3])
     s = simulate(SimConfig(acc_offset=tuple(off), acc_scale=tuple(sc), gyro_scale=tuple(gs), **kw))
     noise = plain["acc"] - qrotate_inv(plain["truth"]["quat"], np.array([0.0, 0.0, 9.81]))
     assert np.allclose(s["acc"], (plain["acc"] - noise) * (1.0 + sc) + off + noise, atol=1e-12)
