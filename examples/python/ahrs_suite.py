@@ -29,8 +29,9 @@ over all scenarios, the Spearman rank correlation of the RMS total error with th
 consecutive 5-s segments (from the settling time on; the median of the per-scenario
 correlations is also given). Time: wall time of each filter's batch run per sample.
 
-Scenarios (full suite; every one 60 s unless named otherwise, seed 20, 2 s initial rest, |ω| up to 3 rad/s, gyro bias
-0.2 °/s per axis with signs (+, −, +) unless named otherwise; sensors as ``imu_sim``'s defaults:
+Scenarios (full suite; every one 60 s (the ``reject`` group 75 s), seed 20, 2 s initial rest,
+|ω| up to 3 rad/s, gyro bias 0.2 °/s per axis with signs (+, −, +) unless named otherwise;
+sensors as ``imu_sim``'s defaults:
 gyro noise 0.005 rad/s, accelerometer 0.05 m/s², magnetometer 0.5 µT per sample at 100 Hz,
 50 µT field with 60° dip):
 
