@@ -227,3 +227,160 @@ def test_deterministic_and_seeded():
         assert np.array_equal(a[k], b[k])
         assert not np.array_equal(a[k], c[k])
     assert np.array_equal(a["truth"]["quat"], b["truth"]["quat"])
+
+
+# ---- issue 34's models: lever arm, position and local field, calibration errors, the stream ----
+
+LEVER = np.array([0.12, -0.2, 0.05])
+
+
+def second_difference_in_body(s, p_world):
+    """The acceleration of a world trajectory p (n×3) by central second differences, in the
+    body frame of the truth (samples 1 … n−2)."""
+    ts = s["Ts"]
+    pdd = (p_world[2:] - 2.0 * p_world[1:-1] + p_world[:-2]) / ts ** 2
+    return qrotate_inv(s["truth"]["quat"][1:-1], pdd)
+
+
+@pytest.mark.parametrize("spin", [False, True])
+def test_lever_arm_matches_the_offset_points_acceleration(spin):
+    # the accelerometer at r from the rotation centre: its position is R(q)·r (the centre
+    # fixed), whose second difference, seen in the body frame, must be the simulator's
+    # ω̇×r + ω×(ω×r) (computed from the body rate, not from the orientation)
+    extra = dict(yaw_spin=2.5, yaw_spin_time=(3.0, 15.0), omega_max=1.0) if spin else {}
+    s = simulate(SimConfig(fs=1000.0, duration=20.0, seed=4, lever_arm=tuple(LEVER), **QUIET,
+                           **extra))
+    p = np.einsum("nij,j->ni", sim_mod.quat_to_matrix(s["truth"]["quat"]), LEVER)
+    lever = s["truth"]["acc_lever"]
+    assert np.max(np.linalg.norm(lever, axis=1)) > 1.0  # a real effect (m/s²)
+    assert np.max(np.abs(second_difference_in_body(s, p) - lever[1:-1])) < 5e-4  # O(Ts²)
+    # it is what the accelerometer adds, and nothing else changes
+    plain = simulate(SimConfig(fs=1000.0, duration=20.0, seed=4, **QUIET, **extra))
+    assert np.max(np.abs(s["acc"] - plain["acc"] - lever)) < 1e-12
+    assert np.array_equal(s["gyr"], plain["gyr"]) and np.array_equal(s["mag"], plain["mag"])
+
+
+def test_spin_about_the_world_vertical():
+    w = math.radians(150.0)
+    s = simulate(SimConfig(duration=30.0, seed=3, yaw_spin=w, yaw_spin_time=(5.0, 25.0),
+                           omega_max=0.0, **QUIET))
+    t, rate = s["t"], np.linalg.norm(s["truth"]["omega"], axis=1)
+    assert np.allclose(rate[(t > 7.0) & (t < 25.0)], w, rtol=0, atol=1e-12)
+    assert np.all(rate[(t < 5.0) | (t > 27.0)] < 1e-12)
+    # the body's vertical stays put in the world (the spin is about the world vertical)
+    up = qrotate_inv(s["truth"]["quat"], np.array([0.0, 0.0, 1.0]))
+    assert np.max(np.abs(up - up[0])) < 1e-9
+    # the gyroscope integrated back reproduces the truth (ramps included)
+    q = s["truth"]["quat"][0]
+    out = [q]
+    for g in s["gyr"][1:]:
+        q = qmul(q, qexp(g * s["Ts"]))
+        out.append(q)
+    assert np.max(angle(np.array(out), s["truth"]["quat"])) < 1e-10
+
+
+def test_position_and_its_acceleration():
+    s = simulate(SimConfig(fs=200.0, duration=60.0, seed=6, pos_amp=(1.5, 1.0, 0.3), **QUIET))
+    p = s["truth"]["position"]
+    assert np.allclose(np.max(np.abs(p), axis=0), [1.5, 1.0, 0.3], rtol=1e-3)
+    # p̈ (closed form, in lin_acc) against second differences of p
+    pdd = (p[2:] - 2.0 * p[1:-1] + p[:-2]) / s["Ts"] ** 2
+    assert np.max(np.abs(pdd - s["truth"]["lin_acc"][1:-1])) < 1e-6
+    plain = simulate(SimConfig(fs=200.0, duration=60.0, seed=6, **QUIET))
+    assert np.max(np.abs(s["acc"] - plain["acc"]
+                         - qrotate_inv(s["truth"]["quat"], s["truth"]["lin_acc"]))) < 1e-12
+    assert np.array_equal(s["gyr"], plain["gyr"]) and np.array_equal(s["mag"], plain["mag"])
+
+
+def test_local_field_offsets():
+    m_e = 50.0 * np.array([0.0, math.cos(math.radians(60.0)), -math.sin(math.radians(60.0))])
+    # a constant offset turns the world field, nothing else
+    off = (0.0, 0.0, math.radians(1.5))
+    s = simulate(SimConfig(duration=20.0, field_offset=off, **QUIET))
+    world = np.einsum("nij,nj->ni", sim_mod.quat_to_matrix(s["truth"]["quat"]), s["mag"])
+    c, sn = math.cos(off[2]), math.sin(off[2])
+    assert np.allclose(world, [c * m_e[0] - sn * m_e[1], sn * m_e[0] + c * m_e[1], m_e[2]],
+                       atol=1e-10, rtol=0)
+    # over the volume: up to field_var, the norm kept, smooth along the slow trajectory
+    s = simulate(SimConfig(duration=60.0, seed=8, pos_amp=(1.5, 1.5, 0.3),
+                           field_var=math.radians(6.0), **QUIET))
+    d = np.linalg.norm(s["truth"]["field_rotation"], axis=1)
+    assert abs(np.max(d) - math.radians(6.0)) < math.radians(0.05)
+    assert np.allclose(np.linalg.norm(s["mag"], axis=1), 50.0, atol=1e-10, rtol=0)
+    assert np.max(np.abs(np.diff(d))) < math.radians(0.01)  # per 10 ms
+    world = np.einsum("nij,nj->ni", sim_mod.quat_to_matrix(s["truth"]["quat"]), s["mag"])
+    expect = np.einsum("nij,j->ni", sim_mod.quat_to_matrix(qexp(s["truth"]["field_rotation"])),
+                       m_e)
+    assert np.allclose(world, expect, atol=1e-10, rtol=0)
+
+
+def test_reversed_start_field():
+    s = simulate(SimConfig(duration=5.0, mag_flip_until=0.5, **QUIET))
+    plain = simulate(SimConfig(duration=5.0, **QUIET))
+    world = np.einsum("nij,nj->ni", sim_mod.quat_to_matrix(s["truth"]["quat"]), s["mag"])
+    early = s["t"] < 0.5
+    assert np.allclose(world[early], [0.0, -25.0, -50.0 * math.sin(math.radians(60.0))],
+                       atol=1e-10)
+    assert np.array_equal(s["mag"][~early], plain["mag"][~early])
+
+
+def test_calibration_errors():
+    kw = dict(duration=20.0, seed=2)
+    plain = simulate(SimConfig(**kw))
+    off, sc = np.array([0.15, -0.1, 0.2]), np.array([0.015, -0.01, 0.02])
+    gs = np.array([2e-3, 0.0, -1e-3])
+    s = simulate(SimConfig(acc_offset=tuple(off), acc_scale=tuple(sc), gyro_scale=tuple(gs), **kw))
+    noise = plain["acc"] - qrotate_inv(plain["truth"]["quat"], np.array([0.0, 0.0, 9.81]))
+    assert np.allclose(s["acc"], (plain["acc"] - noise) * (1.0 + sc) + off + noise, atol=1e-12)
+    assert np.allclose(s["gyr"] - plain["gyr"], plain["truth"]["gyr_clean"] * gs, atol=1e-15)
+    assert np.array_equal(s["mag"], plain["mag"])
+
+
+def test_jittered_sampling_instants():
+    # the precession's closed form at the jittered times: the truth off the fine grid
+    s = simulate(SimConfig(fs=100.0, duration=30.0, time_jitter=0.1, omega_fn=precession_omega,
+                           q0=tuple(B), **QUIET))
+    t, ts = s["t"], s["Ts"]
+    assert s["timed"] and t[0] == 0.0
+    dev = t - np.arange(len(t)) * ts
+    assert np.max(np.abs(dev)) <= 0.1 * ts + 1e-15 and np.max(np.abs(dev)) > 0.09 * ts
+    assert np.max(angle(s["truth"]["quat"], precession_q(t))) < 1e-10
+    # the gyroscope is the mean rate over the true interval: integrated with the timestamps'
+    # steps, it reproduces the truth
+    s = simulate(SimConfig(duration=20.0, seed=3, time_jitter=0.1, yaw_spin=2.0,
+                           yaw_spin_time=(2.0, 10.0), **QUIET))
+    t = s["t"]
+    q = s["truth"]["quat"][0]
+    out = [q]
+    for k in range(1, len(t)):
+        q = qmul(q, qexp(s["gyr"][k] * (t[k] - t[k - 1])))
+        out.append(q)
+    assert np.max(angle(np.array(out), s["truth"]["quat"])) < 1e-10
+
+
+def test_dropped_and_lost_samples():
+    kw = dict(duration=60.0, seed=3)
+    full = simulate(SimConfig(**kw))
+    s = simulate(SimConfig(drop_rate=0.05, **kw))
+    assert s["timed"] and not full["timed"]
+    keep = np.searchsorted(full["t"], s["t"])
+    assert np.array_equal(full["t"][keep], s["t"])
+    assert abs(1.0 - len(keep) / len(full["t"]) - 0.05) < 0.01
+    for k in ("gyr", "acc", "mag"):  # the same samples, less the dropped ones
+        assert np.array_equal(full[k][keep], s[k])
+    assert np.array_equal(full["truth"]["quat"][keep], s["truth"]["quat"])
+    lost = simulate(SimConfig(acc_lost=(30.0, 40.0), mag_lost=(25.0, 45.0), **kw))
+    t = lost["t"]
+    a_gone, m_gone = (t >= 30.0) & (t < 40.0), (t >= 25.0) & (t < 45.0)
+    assert np.all(np.isnan(lost["acc"][a_gone])) and np.all(np.isnan(lost["mag"][m_gone]))
+    assert np.array_equal(lost["acc"][~a_gone], full["acc"][~a_gone])
+    assert np.array_equal(lost["mag"][~m_gone], full["mag"][~m_gone])
+    assert np.array_equal(lost["gyr"], full["gyr"])
+
+
+def test_attached_magnet_removed_again():
+    s = simulate(SimConfig(duration=20.0, attach_time=5.0, attach_end=12.0, **QUIET))
+    d = s["truth"]["mag_attached"]
+    t = s["t"]
+    assert np.allclose(np.linalg.norm(d[(t > 5.5) & (t < 12.0)], axis=1), 20.0)
+    assert np.all(d[(t < 5.0) | (t >= 12.5)] == 0.0)
