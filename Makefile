@@ -3,6 +3,10 @@
 #   make demo                    build the library, then build and run the C/C++ examples
 #   make broad                   the AHRS vs VQF/Madgwick/Mahony on the BROAD trials (BROAD_DIR), then
 #                                the simulated-IMU suite with known truth (examples/python/ahrs_suite.py)
+#   make bench-compare           the AHRS's time per sample against VQF's at 50 Hz, 100 Hz, 286 Hz, 1 kHz
+#                                (BROAD and simulated samples, through the C ABI): the ratio table
+#   make cross-aarch64           the library built for aarch64-unknown-linux-gnu with Debian's Rust
+#                                packages, and tests run under qemu-user (docs/testing.md)
 #   make venv                    the Python package (pip install ./python) in $(TARGET_DIR)/venv
 #   make test                    everything CI runs: `deps`, then `quick`, then `slow` (docs/testing.md)
 #   make quick                   the quick tier (about 2 min on 2 cores once built): the test lists'
@@ -61,7 +65,7 @@ EIGEN3_INCLUDE_DIR ?= /usr/include/eigen3
 VENV := $(abspath $(TARGET_DIR))/venv
 VENV_PYTHON := $(VENV)/bin/python
 
-.PHONY: build header demo demo-programs broad venv test quick slow deps tiers fmt-check clippy doc quick-build \
+.PHONY: build header demo demo-programs broad bench-compare cross-aarch64 venv test quick slow deps tiers fmt-check clippy doc quick-build \
         api-test unit-test c-test slow-test rust-test python-test install install-test uninstall clean \
         sanitize valgrind fuzz long
 
@@ -119,6 +123,31 @@ broad: venv
 	  --plot $(TARGET_DIR)/broad_trial07.svg
 	@echo
 	$(VENV_PYTHON) examples/python/ahrs_suite.py --json $(TARGET_DIR)/ahrs_suite.json
+
+# The AHRS against VQF on the same samples, time per sample at 50 Hz, 100 Hz, 286 Hz and 1 kHz
+# (examples/python/bench_compare.py: the nine BROAD trials, native and decimated, and simulated
+# runs; both batch calls, interleaved, BENCH_REPEATS rounds, medians; figures: docs/speed.md).
+# Not part of `make test`. BENCH_COMPARE_ARGS passes more options (e.g. --kernel portable).
+BENCH_REPEATS ?= 5
+BENCH_COMPARE_ARGS ?=
+
+bench-compare: deps venv
+	$(VENV_PYTHON) examples/python/bench_compare.py $(BROAD_DIR) --repeats $(BENCH_REPEATS) \
+	  --json $(TARGET_DIR)/bench_compare.json $(BENCH_COMPARE_ARGS)
+
+# The library for aarch64-unknown-linux-gnu (scripts/cross-aarch64.sh: Debian's rustc-web and its
+# arm64 standard library unpacked into $(TARGET_DIR)/aarch64-toolchain, the host's cargo, the
+# gcc-aarch64-linux-gnu linker), then AARCH64_TESTS under qemu-user (the portable kernel path:
+# the one an aarch64 CPU runs). Skipped there: the dispatch test that runs its own binary again
+# as a child process (qemu-user emulates one process; without a binfmt_misc handler the child
+# cannot be started). Not part of `make test`; docs/testing.md.
+AARCH64_TESTS ?= dispatch normalization special q4 saddlepoint mle deterministic filter ahrs \
+                 observation spin
+AARCH64_SKIP ?= the_environment_variable_forces_the_path
+
+cross-aarch64:
+	CARGO="$(CARGO)" TARGET_DIR="$(TARGET_DIR)" AARCH64_TESTS="$(AARCH64_TESTS)" \
+	  AARCH64_SKIP="$(AARCH64_SKIP)" scripts/cross-aarch64.sh
 
 # --- tests ---------------------------------------------------------------------------------
 #

@@ -2,9 +2,11 @@
 //! runs agrees with the portable one to 1e-14 relative (log F, ω, and the Hessian relative to
 //! `√(H_ii H_jj)`), over random z in [−1e6, 0]^d, ties, zeros and extremes up to the largest
 //! doubles; each path gives bit-identical results on repeated calls and on other threads; and
-//! the default evaluation uses the detected path.
+//! the default evaluation uses the detected path; `BINGHAM_KERNEL` forces the path of a process
+//! (this binary run again as a child process with the variable set), and a value naming no path
+//! or a path the CPU lacks falls back to the fastest available one.
 
-use bingham::normalization::{log_f_with_path, log_normalization_into, Method, Path};
+use bingham::normalization::{log_f_with_path, log_normalization_into, Method, Path, KERNEL_ENV};
 use testkit::Rng64;
 
 /// log F, ω and H (input order) on one path.
@@ -172,5 +174,106 @@ fn results_are_bit_identical_across_calls_and_threads() {
         for t in threads {
             assert_eq!(first, t.join().unwrap(), "{path:?}: another thread differs");
         }
+    }
+}
+
+/// Set in the child process of [`the_environment_variable_forces_the_path`].
+const CHILD: &str = "BINGHAM_DISPATCH_CHILD";
+
+/// The z the child evaluates (d = 3 and 4, gradient and Hessian).
+fn child_inputs() -> Vec<Vec<f64>> {
+    inputs().into_iter().step_by(50).collect()
+}
+
+/// One line per input: the bits of log F, ω and H of the default evaluation (hex).
+fn default_transcript(zs: &[Vec<f64>]) -> Vec<String> {
+    zs.iter()
+        .map(|z| {
+            let d = z.len();
+            let mut g = vec![0.0; d];
+            let mut h = vec![0.0; d * d];
+            let lf = log_normalization_into(z, Method::Exact, Some(&mut g), Some(&mut h)).unwrap();
+            std::iter::once(lf)
+                .chain(g)
+                .chain(h)
+                .map(|v| format!("{:016x}", v.to_bits()))
+                .collect::<Vec<_>>()
+                .join(" ")
+        })
+        .collect()
+}
+
+/// The child's side: does nothing unless started by the test below; then prints the chosen
+/// path and the transcript of the default evaluation.
+#[test]
+fn child_reports_its_path() {
+    if std::env::var_os(CHILD).is_none() {
+        return;
+    }
+    // own lines (the test harness prints the test's name without a line break before it)
+    println!("\nKERNEL-PATH {}", Path::detected().name());
+    for line in default_transcript(&child_inputs()) {
+        println!("KERNEL-BITS {line}");
+    }
+}
+
+#[test]
+fn the_environment_variable_forces_the_path() {
+    let exe = std::env::current_exe().unwrap();
+    let zs = child_inputs();
+    let values: [Option<&str>; 8] = [
+        None,
+        Some("portable"),
+        Some("avx2"),
+        Some("avx512"),
+        Some(" AVX2 "),
+        Some("sse4"),
+        Some(""),
+        Some("avx512-please"),
+    ];
+    for value in values {
+        let mut cmd = std::process::Command::new(&exe);
+        cmd.args([
+            "--exact",
+            "child_reports_its_path",
+            "--nocapture",
+            "--test-threads=1",
+        ])
+        .env(CHILD, "1");
+        match value {
+            Some(v) => cmd.env(KERNEL_ENV, v),
+            None => cmd.env_remove(KERNEL_ENV),
+        };
+        let out = cmd.output().unwrap();
+        assert!(out.status.success(), "{value:?}: the child failed: {out:?}");
+        let stdout = String::from_utf8(out.stdout).unwrap();
+        let name = stdout
+            .lines()
+            .find_map(|l| l.strip_prefix("KERNEL-PATH "))
+            .unwrap_or_else(|| panic!("{value:?}: no path in {stdout}"));
+        let chosen = Path::from_name(name).unwrap();
+        // the named path where this CPU runs it, else the fastest one; never an unavailable one
+        let expected = match value.and_then(Path::from_name) {
+            Some(p) if p.available() => p,
+            _ => Path::fastest(),
+        };
+        assert_eq!(chosen, expected, "{KERNEL_ENV}={value:?}");
+        assert!(chosen.available());
+        // the child's default evaluation ran on that path: the same bits as the path here
+        let bits: Vec<&str> = stdout
+            .lines()
+            .filter_map(|l| l.strip_prefix("KERNEL-BITS "))
+            .collect();
+        assert_eq!(bits.len(), zs.len(), "{value:?}");
+        for (z, line) in zs.iter().zip(bits) {
+            let (lf, g, h) = eval(z, chosen);
+            let want: Vec<String> = std::iter::once(lf)
+                .chain(g)
+                .chain(h)
+                .map(|v| format!("{:016x}", v.to_bits()))
+                .collect();
+            assert_eq!(line, want.join(" "), "{KERNEL_ENV}={value:?}, z = {z:?}");
+        }
+        println!("{KERNEL_ENV}={value:?}: {name}");
     }
 }

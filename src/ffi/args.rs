@@ -111,6 +111,7 @@ pub(crate) trait Arg: Sized {
     ///
     /// # Safety
     /// As for [`take`](Arg::take), without the precondition on `check`.
+    #[inline(always)]
     unsafe fn read(self) -> FfiResult<Self::Value> {
         self.check()?;
         // SAFETY: checked just now; the pointer contract is the caller's.
@@ -125,12 +126,14 @@ macro_rules! arg_tuple {
         impl<$($a: Arg),*> Arg for ($($a,)*) {
             type Value = ($($a::Value,)*);
 
+            #[inline(always)]
             fn check(&self) -> FfiResult<()> {
                 let ($($a,)*) = self;
                 $($a.check()?;)*
                 Ok(())
             }
 
+            #[inline(always)]
             unsafe fn take(self) -> FfiResult<Self::Value> {
                 let ($($a,)*) = self;
                 // SAFETY: forwarded contract (each item checked as part of the list).
@@ -152,6 +155,7 @@ arg_tuple!(A, B, C, D, E, F, G);
 pub(crate) struct Opt<A>(Option<A>);
 
 impl<A> Opt<A> {
+    #[inline]
     pub(crate) fn when(present: bool, arg: A) -> Opt<A> {
         Opt(present.then_some(arg))
     }
@@ -160,10 +164,12 @@ impl<A> Opt<A> {
 impl<A: Arg> Arg for Opt<A> {
     type Value = Option<A::Value>;
 
+    #[inline]
     fn check(&self) -> FfiResult<()> {
         self.0.as_ref().map_or(Ok(()), Arg::check)
     }
 
+    #[inline]
     unsafe fn take(self) -> FfiResult<Self::Value> {
         // SAFETY: forwarded contract.
         self.0.map(|a| unsafe { a.take() }).transpose()
@@ -181,6 +187,7 @@ pub(crate) struct ArrayIn<'a> {
 }
 
 impl ArrayIn<'_> {
+    #[inline]
     pub(crate) fn new(name: &'static str, p: *const f64, len: usize) -> Self {
         ArrayIn {
             name,
@@ -191,6 +198,7 @@ impl ArrayIn<'_> {
         }
     }
 
+    #[inline]
     pub(crate) fn raw(name: &'static str, p: *const f64, len: usize) -> Self {
         ArrayIn {
             finite: false,
@@ -202,10 +210,12 @@ impl ArrayIn<'_> {
 impl<'a> Arg for ArrayIn<'a> {
     type Value = &'a [f64];
 
+    #[inline]
     fn check(&self) -> FfiResult<()> {
         need(self.name, self.p)
     }
 
+    #[inline(always)]
     unsafe fn take(self) -> FfiResult<&'a [f64]> {
         // SAFETY: forwarded contract (`len` readable doubles).
         unsafe {
@@ -226,6 +236,7 @@ pub(crate) struct BinghamIn {
 }
 
 impl BinghamIn {
+    #[inline]
     pub(crate) fn new(
         d: usize,
         m_name: &'static str,
@@ -244,11 +255,13 @@ impl BinghamIn {
 impl Arg for BinghamIn {
     type Value = Bingham;
 
+    #[inline]
     fn check(&self) -> FfiResult<()> {
         need(self.m.0, self.m.1)?;
         need(self.z.0, self.z.1)
     }
 
+    #[inline]
     unsafe fn take(self) -> FfiResult<Bingham> {
         let (d, (m_name, m), (z_name, z)) = (self.d, self.m, self.z);
         // SAFETY: forwarded contract (d*d and d readable doubles); d <= 64 (checked by the
@@ -269,6 +282,7 @@ pub(crate) struct RowsIn<'a, const K: usize> {
 }
 
 impl<const K: usize> RowsIn<'_, K> {
+    #[inline]
     pub(crate) fn new(name: &'static str, p: *const f64, rows: usize) -> Self {
         RowsIn {
             name,
@@ -282,10 +296,12 @@ impl<const K: usize> RowsIn<'_, K> {
 impl<'a, const K: usize> Arg for RowsIn<'a, K> {
     type Value = &'a [[f64; K]];
 
+    #[inline]
     fn check(&self) -> FfiResult<()> {
         need(self.name, self.p)
     }
 
+    #[inline]
     unsafe fn take(self) -> FfiResult<&'a [[f64; K]]> {
         let len = len2(self.name, self.rows, K)?;
         // SAFETY: forwarded contract (`rows * K` readable doubles, no overflow: checked).
@@ -304,6 +320,7 @@ pub(crate) struct ArrayOut {
 }
 
 impl ArrayOut {
+    #[inline]
     pub(crate) fn new(name: &'static str, p: *mut f64, len: usize) -> Self {
         ArrayOut { name, p, len }
     }
@@ -312,10 +329,12 @@ impl ArrayOut {
 impl Arg for ArrayOut {
     type Value = Output;
 
+    #[inline]
     fn check(&self) -> FfiResult<()> {
         need(self.name, self.p)
     }
 
+    #[inline]
     unsafe fn take(self) -> FfiResult<Output> {
         Ok(Output {
             p: self.p,
@@ -331,6 +350,7 @@ pub(crate) struct Output {
 }
 
 impl Output {
+    #[inline]
     pub(crate) fn len(&self) -> usize {
         self.len
     }
@@ -340,6 +360,7 @@ impl Output {
     /// # Safety
     /// Call only after every input has been read and the computation has succeeded (outputs may
     /// alias inputs): no reference into the caller's memory may be used afterwards.
+    #[inline]
     pub(crate) unsafe fn write(self, src: &[f64]) {
         debug_assert!(src.len() <= self.len);
         // SAFETY: checked pointer, `len` writable doubles (contract of `take`); see above.
@@ -354,6 +375,7 @@ pub(crate) struct ValueOut<T> {
 }
 
 impl<T> ValueOut<T> {
+    #[inline]
     pub(crate) fn new(name: &'static str, p: *mut T) -> Self {
         ValueOut { name, p }
     }
@@ -362,10 +384,12 @@ impl<T> ValueOut<T> {
 impl<T> Arg for ValueOut<T> {
     type Value = Place<T>;
 
+    #[inline]
     fn check(&self) -> FfiResult<()> {
         need(self.name, self.p)
     }
 
+    #[inline]
     unsafe fn take(self) -> FfiResult<Place<T>> {
         Ok(Place(self.p))
     }
@@ -379,6 +403,7 @@ impl<T> Place<T> {
     ///
     /// # Safety
     /// As for [`Output::write`].
+    #[inline]
     pub(crate) unsafe fn set(self, value: T) {
         // SAFETY: non-NULL, aligned and writable (checked; contract of `take`).
         unsafe { self.0.write(value) }
@@ -390,6 +415,7 @@ impl<T> Place<*mut T> {
     ///
     /// # Safety
     /// As for [`Output::write`].
+    #[inline]
     pub(crate) unsafe fn set_handle(self, value: T) {
         // SAFETY: checked, writable `T *` (contract of `take`).
         unsafe { write_handle(self.0, value) }
@@ -404,6 +430,7 @@ pub(crate) struct BinghamOut {
 }
 
 impl BinghamOut {
+    #[inline]
     pub(crate) fn new(
         m_name: &'static str,
         m: *mut f64,
@@ -420,11 +447,13 @@ impl BinghamOut {
 impl Arg for BinghamOut {
     type Value = BinghamOutput;
 
+    #[inline]
     fn check(&self) -> FfiResult<()> {
         need(self.m.0, self.m.1)?;
         need(self.z.0, self.z.1)
     }
 
+    #[inline]
     unsafe fn take(self) -> FfiResult<BinghamOutput> {
         Ok(BinghamOutput {
             m: self.m.1,
@@ -444,6 +473,7 @@ impl BinghamOutput {
     ///
     /// # Safety
     /// As for [`Output::write`]; the outputs hold d*d and d doubles for the dimension d of `b`.
+    #[inline]
     pub(crate) unsafe fn write(self, b: &Bingham) {
         let mr = b.m_row_major();
         // SAFETY: checked pointers (contract of `take`), lengths d*d and d; see above.
@@ -463,6 +493,7 @@ pub(crate) struct SliceOut<'a> {
 }
 
 impl SliceOut<'_> {
+    #[inline]
     pub(crate) fn new(name: &'static str, p: *mut f64, len: usize) -> Self {
         SliceOut {
             name,
@@ -476,10 +507,12 @@ impl SliceOut<'_> {
 impl<'a> Arg for SliceOut<'a> {
     type Value = &'a mut [f64];
 
+    #[inline]
     fn check(&self) -> FfiResult<()> {
         need(self.name, self.p)
     }
 
+    #[inline]
     unsafe fn take(self) -> FfiResult<&'a mut [f64]> {
         // SAFETY: forwarded contract (`len` writable doubles, not aliased by any input in use).
         unsafe { output(self.name, self.p, self.len) }
@@ -495,6 +528,7 @@ pub(crate) struct RowsOut<'a, const K: usize> {
 }
 
 impl<const K: usize> RowsOut<'_, K> {
+    #[inline]
     pub(crate) fn new(name: &'static str, p: *mut f64, rows: usize) -> Self {
         RowsOut {
             name,
@@ -508,10 +542,12 @@ impl<const K: usize> RowsOut<'_, K> {
 impl<'a, const K: usize> Arg for RowsOut<'a, K> {
     type Value = &'a mut [[f64; K]];
 
+    #[inline]
     fn check(&self) -> FfiResult<()> {
         need(self.name, self.p)
     }
 
+    #[inline]
     unsafe fn take(self) -> FfiResult<&'a mut [[f64; K]]> {
         let len = len2(self.name, self.rows, K)?;
         // SAFETY: forwarded contract (`rows * K` writable doubles, no overflow: checked).

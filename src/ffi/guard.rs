@@ -107,21 +107,37 @@ fn panic_message(payload: &(dyn Any + Send)) -> &str {
 
 /// Runs the body of the exported function `name`: catches panics, turns errors into a status and
 /// stores their message (prefixed with `name`) as this thread's last error.
+///
+/// The success path is the body and a test of its result: `catch_unwind` costs nothing until a
+/// panic unwinds, and the last-error slot is touched only on failure (in the cold functions
+/// below, kept out of line so that the exports' fast path stays small; issue 35, `docs/speed.md`
+/// row `c-call`).
+#[inline]
 pub(crate) fn guard(name: &'static str, body: impl FnOnce() -> FfiResult<()>) -> bingham_status {
     match catch_unwind(AssertUnwindSafe(body)) {
         Ok(Ok(())) => bingham_status::BINGHAM_OK,
-        Ok(Err(failure)) => {
-            set_last_error(format!("{name}: {}", failure.message));
-            failure.status
-        }
-        Err(payload) => {
-            set_last_error(format!(
-                "{name}: internal error (panic): {}",
-                panic_message(payload.as_ref())
-            ));
-            bingham_status::BINGHAM_ERR_PANIC
-        }
+        Ok(Err(failure)) => failed(name, failure),
+        Err(payload) => panicked(name, payload),
     }
+}
+
+/// The error path of [`guard`]: stores the message, returns the status.
+#[cold]
+#[inline(never)]
+fn failed(name: &'static str, failure: Failure) -> bingham_status {
+    set_last_error(format!("{name}: {}", failure.message));
+    failure.status
+}
+
+/// The panic path of [`guard`].
+#[cold]
+#[inline(never)]
+fn panicked(name: &'static str, payload: Box<dyn Any + Send>) -> bingham_status {
+    set_last_error(format!(
+        "{name}: internal error (panic): {}",
+        panic_message(payload.as_ref())
+    ));
+    bingham_status::BINGHAM_ERR_PANIC
 }
 
 /// `d` within `MIN_DIM..=MAX_DIM`; checked before any array is read, because array lengths
@@ -138,17 +154,35 @@ pub(crate) fn len2(what: &str, a: usize, b: usize) -> FfiResult<usize> {
 }
 
 /// A required pointer: not NULL and aligned for `T`.
+#[inline]
 pub(crate) fn need<T>(name: &str, p: *const T) -> FfiResult<()> {
-    if p.is_null() {
-        Err(Failure::null(name))
-    } else if (p as usize) % std::mem::align_of::<T>() != 0 {
-        Err(Failure::new(
-            bingham_status::BINGHAM_ERR_NULL_ARGUMENT,
-            format!("`{name}` is not aligned for its type"),
-        ))
+    if p.is_null() || (p as usize) % std::mem::align_of::<T>() != 0 {
+        Err(bad_pointer(name, p.is_null()))
     } else {
         Ok(())
     }
+}
+
+/// The failure of [`need`] (out of line: the checks' fast path stays small).
+#[cold]
+#[inline(never)]
+fn bad_pointer(name: &str, null: bool) -> Failure {
+    if null {
+        Failure::null(name)
+    } else {
+        Failure::new(
+            bingham_status::BINGHAM_ERR_NULL_ARGUMENT,
+            format!("`{name}` is not aligned for its type"),
+        )
+    }
+}
+
+/// The failure of [`read`]: names the first entry that is not finite.
+#[cold]
+#[inline(never)]
+fn not_finite(name: &str, s: &[f64]) -> Failure {
+    let i = s.iter().position(|v| !v.is_finite()).unwrap_or(0);
+    Failure::argument(format!("`{name}[{i}]` = {} is not finite", s[i]))
 }
 
 /// Borrows the caller's input array `p[0..len]` after checking the pointer and that every entry
@@ -157,6 +191,7 @@ pub(crate) fn need<T>(name: &str, p: *const T) -> FfiResult<()> {
 /// # Safety
 /// `p` must be NULL or point to `len` readable `double`s that stay valid and are not written
 /// while the returned slice is used (the C caller's side of the contract in the header).
+#[inline]
 pub(crate) unsafe fn read<'a>(name: &str, p: *const f64, len: usize) -> FfiResult<&'a [f64]> {
     if len == 0 {
         return Ok(&[]);
@@ -165,11 +200,10 @@ pub(crate) unsafe fn read<'a>(name: &str, p: *const f64, len: usize) -> FfiResul
     // SAFETY: p is non-NULL and aligned (checked above); the caller guarantees `len` readable
     // doubles; `len * 8 <= isize::MAX` is guaranteed by the callers (`len2` or `len <= 64²`).
     let s = unsafe { std::slice::from_raw_parts(p, len) };
-    if let Some(i) = s.iter().position(|v| !v.is_finite()) {
-        return Err(Failure::argument(format!(
-            "`{name}[{i}]` = {} is not finite",
-            s[i]
-        )));
+    // every entry tested (no early exit: a loop the compiler can vectorize), the message built
+    // out of line
+    if !s.iter().fold(true, |ok, v| ok & v.is_finite()) {
+        return Err(not_finite(name, s));
     }
     Ok(s)
 }
@@ -179,6 +213,7 @@ pub(crate) unsafe fn read<'a>(name: &str, p: *const f64, len: usize) -> FfiResul
 ///
 /// # Safety
 /// As for [`read`].
+#[inline]
 pub(crate) unsafe fn read_raw<'a>(name: &str, p: *const f64, len: usize) -> FfiResult<&'a [f64]> {
     if len == 0 {
         return Ok(&[]);
@@ -217,11 +252,23 @@ pub(crate) unsafe fn output<'a>(name: &str, p: *mut f64, len: usize) -> FfiResul
 /// # Safety
 /// `p` must be non-NULL, aligned, and point to `src.len()` writable `double`s; no Rust reference
 /// to that memory may be used afterwards.
+#[inline]
 pub(crate) unsafe fn write(p: *mut f64, src: &[f64]) {
     debug_assert!(!p.is_null());
+    use std::ptr::copy_nonoverlapping as copy;
+    // Short outputs (a value, a vector, a quaternion) are copied with a constant length: a few
+    // moves instead of a call of `memcpy`.
     // SAFETY: the caller guarantees `src.len()` writable doubles at `p`; `src` is library-owned
     // memory, so the two ranges do not overlap.
-    unsafe { std::ptr::copy_nonoverlapping(src.as_ptr(), p, src.len()) }
+    unsafe {
+        match src.len() {
+            1 => copy(src.as_ptr(), p, 1),
+            2 => copy(src.as_ptr(), p, 2),
+            3 => copy(src.as_ptr(), p, 3),
+            4 => copy(src.as_ptr(), p, 4),
+            n => copy(src.as_ptr(), p, n),
+        }
+    }
 }
 
 // ---- opaque handles (`bingham_filter *` and future ones) ---------------------------------------

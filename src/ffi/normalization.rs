@@ -9,6 +9,17 @@ use super::guard::{dim, guard, Failure, FfiResult};
 use super::status::bingham_status;
 use crate::normalization::{log_normalization_into, Method};
 
+/// Runs `f` with a zeroed buffer of `d` doubles: on the stack for d ≤ 4 (zeroing a buffer of
+/// `MAX_DIM` doubles on every call cost about as much as the d = 2 call's argument checks), on
+/// the heap beyond (where the evaluation itself takes microseconds).
+fn with_buffer<R>(d: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
+    if d <= 4 {
+        f(&mut [0.0; 4][..d])
+    } else {
+        f(&mut vec![0.0; d])
+    }
+}
+
 /// Shared body of the log-normalization functions.
 ///
 /// # Safety
@@ -23,16 +34,17 @@ unsafe fn log_normalization_ffi(
     dim(d)?;
     // SAFETY: forwarded caller contract.
     let (zs, log_f, dlog_f) = unsafe { args!(z: [d], log_f: out, dlog_f: opt out [d]).read()? };
-    let mut grad = [0.0; crate::error::MAX_DIM];
-    let lf = log_normalization_into(zs, method, dlog_f.is_some().then_some(&mut grad[..d]), None)?;
-    // SAFETY: every input has been read; lengths 1 and d.
-    unsafe {
-        log_f.set(lf);
-        if let Some(dlog_f) = dlog_f {
-            dlog_f.write(&grad[..d]);
+    with_buffer(d, |grad| {
+        let lf = log_normalization_into(zs, method, dlog_f.is_some().then_some(&mut *grad), None)?;
+        // SAFETY: every input has been read; lengths 1 and d.
+        unsafe {
+            log_f.set(lf);
+            if let Some(dlog_f) = dlog_f {
+                dlog_f.write(grad);
+            }
         }
-    }
-    Ok(())
+        Ok(())
+    })
 }
 
 /// The normalization constant `F(Z) = ∫_{S^{d-1}} exp(xᵀ Z x) dx` and, optionally, its gradient.
@@ -68,27 +80,31 @@ pub unsafe extern "C" fn bingham_normalization_constant(
         dim(d)?;
         // SAFETY: caller contract.
         let (zs, f, df) = unsafe { args!(z: [d], f: out, df: opt out [d]).read()? };
-        let mut grad = [0.0; crate::error::MAX_DIM];
-        let lf = log_normalization_into(zs, Method::Exact, Some(&mut grad[..d]), None)?;
-        let value = lf.exp();
-        if !value.is_normal() {
-            return Err(Failure::new(
-                bingham_status::BINGHAM_ERR_NUMERICAL,
-                format!(
-                    "F = exp({lf:.6e}) is not representable as a double (overflow or underflow); \
-                     use bingham_log_normalization_constant"
-                ),
-            ));
-        }
-        let dfv: Vec<f64> = grad[..d].iter().map(|w| value * w).collect();
-        // SAFETY: every input has been read; lengths 1 and d.
-        unsafe {
-            f.set(value);
-            if let Some(df) = df {
-                df.write(&dfv);
+        with_buffer(d, |grad| {
+            let lf = log_normalization_into(zs, Method::Exact, Some(&mut *grad), None)?;
+            let value = lf.exp();
+            if !value.is_normal() {
+                return Err(Failure::new(
+                    bingham_status::BINGHAM_ERR_NUMERICAL,
+                    format!(
+                        "F = exp({lf:.6e}) is not representable as a double (overflow or \
+                         underflow); use bingham_log_normalization_constant"
+                    ),
+                ));
             }
-        }
-        Ok(())
+            // ∂F/∂z_i = F ω_i
+            for w in grad.iter_mut() {
+                *w *= value;
+            }
+            // SAFETY: every input has been read; lengths 1 and d.
+            unsafe {
+                f.set(value);
+                if let Some(df) = df {
+                    df.write(grad);
+                }
+            }
+            Ok(())
+        })
     })
 }
 

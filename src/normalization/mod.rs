@@ -11,7 +11,7 @@ pub(crate) mod d2;
 mod gauss;
 mod quadrature;
 #[doc(hidden)]
-pub use quadrature::{log_f_sorted_fine, log_f_sorted_tuned, Path};
+pub use quadrature::{log_f_sorted_fine, log_f_sorted_tuned, Path, KERNEL_ENV};
 mod saddlepoint;
 
 use crate::error::{check_dim, check_finite, Error, Result, MAX_DIM};

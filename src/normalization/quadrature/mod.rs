@@ -31,7 +31,7 @@ mod simd;
 
 use groups::{d_factors, Group};
 use kernel::half_setup;
-pub use kernel_path::Path;
+pub use kernel_path::{Path, KERNEL_ENV};
 use rule::{padded, Layout, Rule, LAYOUT, RULE};
 use simd::half_on;
 
