@@ -146,8 +146,10 @@ pub(crate) trait Arith: Copy {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Plain;
 
-/// `a·b + c` fused (one rounding): only for code compiled with the FMA instructions enabled.
+/// `a·b + c` fused (one rounding): only for code compiled with the FMA instructions enabled
+/// (the x86-64 kernels; other targets build only the portable one).
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 pub(crate) struct Fused;
 
 impl Arith for Plain {

@@ -8,7 +8,9 @@ use super::groups::Group;
 use super::kernel::{half, HalfSetup, Sums};
 use super::kernel_path::Path;
 use super::rule::Rule;
-use crate::special::lanes::{Arith, Fused, Plain};
+#[cfg(target_arch = "x86_64")]
+use crate::special::lanes::Fused;
+use crate::special::lanes::{Arith, Plain};
 
 /// [`half`] for the group sizes and moments asked for, with arithmetic `A` on `L` lanes.
 #[inline(always)]
