@@ -40,17 +40,25 @@ def sim():
     return imu_sim.simulate(imu_sim.SimConfig(fs=FS, seed=1, duration=60.0, rest=REST))
 
 
-def scores(ts, gyr, acc, mag):
+def scores(ts, gyr, acc, mag, time=None):
     a = bh.Ahrs(ts)
-    _, h = a.update_batch(gyr, acc, mag, health=True)
+    _, h = a.update_batch(gyr, acc, mag, health=True, time=time)
     return h, a.health()
+
+
+# Scenarios whose input is wrong by construction: start_flip180's field points the other way
+# for its first half second (a wrong start the AHRS must recover from; the readout rightly
+# flags it).
+WRONG_BY_DESIGN = {"start_flip180"}
 
 
 def test_correct_input_stays_below_the_threshold_on_the_suite():
     worst = {}
     for name, _, overrides, _ in ahrs_suite.scenarios():
+        if name in WRONG_BY_DESIGN:
+            continue
         s = imu_sim.simulate(ahrs_suite.config_for(overrides, ahrs_suite.SEED, True))
-        h, _ = scores(s["Ts"], s["gyr"], s["acc"], s["mag"])
+        h, _ = scores(s["Ts"], s["gyr"], s["acc"], s["mag"], s.get("time"))
         worst[name] = float(h.max())
     print({k: round(v, 3) for k, v in worst.items()})
     assert max(worst.values()) < THR / 2, worst

@@ -759,8 +759,10 @@ fn step(
         s.health.gravity(t, gravity_excess);
         let nu = s.health.correction(t, &prior.lam, &evidence);
         let innovation = nu.largest();
-        // the stated uncertainty's averages (module `uncertainty`): the excess relative to g
-        let gravity_dev = gravity_excess.map(|x| x * p.acc_reject / p.gravity);
+        // the stated uncertainty's averages (module `uncertainty`): the excess relative to g,
+        // weighted as the tilt evidence is (divided by 1 + excess²: the state follows an
+        // accelerometer error only as far as the evidence it gives counts)
+        let gravity_dev = gravity_excess.map(|x| x * p.acc_reject / p.gravity / (1.0 + x * x));
         s.calib.correction(t, &nu, gravity_dev);
         // 5.5 one exact Bayes product with every exponent
         let update = correction::update(core, &prior, &evidence)?;

@@ -23,8 +23,10 @@
 //! acceleration has not averaged out, and an accelerometer's scale and offset errors, tilt
 //! the state with it. The accelerometer shows such an error in what it can see — the
 //! low-passed norm's deviation from gravity — and an error with no preferred direction is as
-//! large across the vertical (tilt) as along it (norm): each horizontal axis's variance gains
-//! the mean squared relative deviation `((|ā| − g)/g)²` over [`CALIBRATION_TIME`].
+//! large across the vertical (tilt) as along it (norm), and the state follows it as far as the
+//! evidence it gives counts (the rejection divides that by `1 + x²`, `x = (|ā| − g)/acc_reject`):
+//! each horizontal axis's variance gains the mean over [`CALIBRATION_TIME`] of the squared
+//! relative deviation `((|ā| − g)/g)²` times that weight squared.
 //!
 //! Likewise the
 //! heading's reference is the local magnetic field, which indoors deviates from the Earth's by
@@ -83,7 +85,8 @@ pub(super) struct Calibration {
 
 impl Calibration {
     /// The innovations of one correction of period `t` (s), and the low-passed
-    /// accelerometer's relative deviation from gravity `(|ā| − g)/g` if it observed the tilt.
+    /// accelerometer's relative deviation from gravity `(|ā| − g)/g`, weighted as its evidence
+    /// (module documentation), if it observed the tilt.
     pub(super) fn correction(&mut self, t: f64, nu: &Innovations, gravity_dev: Option<f64>) {
         let alpha = (t / CALIBRATION_TIME).min(1.0);
         if let Some(x) = gravity_dev {
