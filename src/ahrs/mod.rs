@@ -256,10 +256,25 @@ impl Ahrs {
     /// what the innovations show and widened by the heading reference's error (module
     /// `uncertainty`). Before the first sample: that of the uniform distribution.
     pub fn angular_spread(&self, out: &mut [f64; 4]) -> Result<()> {
-        let Some((_, v)) = self.stated_covariance()? else {
+        let Some(f) = &self.filter else {
             crate::observation::spread_from_omega(&[0.25; 4], out);
             return Ok(());
         };
+        // the variances along the principal directions only (not the 3×3 covariance): the
+        // body-frame directions, their vertical components in the world, the pending noise
+        // along them
+        let core = f.core4()?;
+        let (m, _) = core.params();
+        let q = core.mode();
+        let r = q4::to_matrix(&q);
+        let dirs = bias::principal_directions(m, &q);
+        let z: [f64; 3] = std::array::from_fn(|i| {
+            let u = &dirs[i];
+            r[2][0] * u.x + r[2][1] * u.y + r[2][2] * u.z
+        });
+        let pending = bias::psd(&self.sample_state.bias.pending);
+        let noise: [f64; 3] = std::array::from_fn(|i| (dirs[i].transpose() * pending * dirs[i])[0]);
+        let v = uncertainty::stated_variances(&z, &noise, &self.stated_parts());
         for (o, x) in out.iter_mut().zip(&v) {
             *o = x.sqrt();
         }
@@ -304,17 +319,25 @@ impl Ahrs {
         let r = q4::to_matrix(&q);
         let r = Matrix3::from_fn(|i, j| r[i][j]);
         let dirs = bias::principal_directions(m, &q).map(|u| r * u);
-        let var: [f64; 3] = std::array::from_fn(|i| 4.0 * self.sample_state.omega[i]);
         // the pending noise made positive semi-definite, as the next correction takes it
         let pending = r * bias::psd(&self.sample_state.bias.pending) * r.transpose();
         Ok(Some(uncertainty::stated(
             &dirs,
-            &var,
             &pending,
-            &self.sample_state.calib,
-            self.sample_state.mag.heading_reference_variance(),
-            self.sample_state.gyro.gap_stated,
+            &self.stated_parts(),
         )))
+    }
+
+    /// What the stated covariance is made of besides the principal directions.
+    fn stated_parts(&self) -> uncertainty::Parts {
+        let s = &self.sample_state;
+        uncertainty::Parts {
+            var: std::array::from_fn(|i| 4.0 * s.omega[i]),
+            scales: s.calib.scales(),
+            tilt_ref: s.calib.tilt_reference_variance(),
+            heading_ref: s.mag.heading_reference_variance(),
+            gap: s.gyro.gap_stated,
+        }
     }
 
     /// The health readout (module `health`): how well the sensors agree with the model

@@ -79,6 +79,9 @@ pub(super) struct Calibration {
     /// The seconds of corrections each average has seen.
     tilt_time: f64,
     heading_time: f64,
+    /// [`Calibration::scales`] as of the last correction (`None` before the first), so that a
+    /// readout between corrections does not recompute it.
+    cached: Option<(f64, f64)>,
     /// The low-passed accelerometer's squared relative deviation from gravity.
     gravity: Average,
 }
@@ -100,11 +103,17 @@ impl Calibration {
             self.heading.push(x, alpha);
             self.heading_time += t;
         }
+        self.cached = Some(self.compute_scales());
     }
 
     /// The variance factors `(s_t, s_h)`: 1 before the sensor's first innovation, then
     /// moving to the innovations' average over [`STARTUP_TIME`] (module documentation).
     pub(super) fn scales(&self) -> (f64, f64) {
+        self.cached.unwrap_or((1.0, 1.0))
+    }
+
+    /// [`Calibration::scales`] from the averages.
+    fn compute_scales(&self) -> (f64, f64) {
         let s = |a: &Average, time: f64| {
             if a.is_empty() || !a.value().is_finite() {
                 1.0
@@ -125,54 +134,85 @@ impl Calibration {
     pub(super) fn tilt_reference_variance(&self) -> f64 {
         self.gravity.value()
     }
+}
 
-    /// The factor `s_t (1 − u_z²) + s_h u_z²` of a world-frame unit direction `u`.
-    pub(super) fn scale_along(&self, u: &Vector3<f64>) -> f64 {
-        let (st, sh) = self.scales();
-        let z2 = (u.z * u.z).min(1.0);
+/// What the stated covariance is made of (module documentation), besides the principal
+/// directions: the filter's variances along them, the factors, the references' variances and
+/// the gaps' variance.
+pub(super) struct Parts {
+    /// The filter's variances (rad²) along the principal directions (`4 ω_i`).
+    pub(super) var: [f64; 3],
+    /// The innovations' factors `(s_t, s_h)` ([`Calibration::scales`]).
+    pub(super) scales: (f64, f64),
+    /// The tilt reference's variance (rad² per horizontal axis).
+    pub(super) tilt_ref: f64,
+    /// The heading reference's variance (rad²).
+    pub(super) heading_ref: f64,
+    /// The variance (rad² per axis) that gyroscope gaps have added: physical, in the filter's
+    /// covariance unscaled, so stated as it is, not scaled.
+    pub(super) gap: f64,
+}
+
+impl Parts {
+    /// The factor `s_t (1 − u_z²) + s_h u_z²` of a world-frame unit direction `u` whose
+    /// vertical component squared is `z2`.
+    fn scale_along(&self, z2: f64) -> f64 {
+        let (st, sh) = self.scales;
+        let z2 = z2.min(1.0);
         st * (1.0 - z2) + sh * z2
     }
 }
 
+/// The stated variances along the principal directions, from their world-frame vertical
+/// components `z` and the pending noise's variances along them `noise` (rad²): `v_i =
+/// s_i (var_i + noise_i) + (1 − s_i) gap + heading_ref z_i² + tilt_ref (1 − z_i²)`, `s_i` the
+/// direction's factor. Their sum is the trace of [`stated`]'s covariance (the total spread²).
+pub(super) fn stated_variances(z: &[f64; 3], noise: &[f64; 3], parts: &Parts) -> [f64; 3] {
+    let tilt_ref = parts.tilt_ref;
+    std::array::from_fn(|i| {
+        let z2 = (z[i] * z[i]).min(1.0);
+        let s = parts.scale_along(z2);
+        // the gaps' variance is in `var` scaled by s: state it at its physical size
+        let g = (parts.gap * (1.0 - s)).max(0.0);
+        (s * (parts.var[i].max(0.0) + noise[i])).max(0.0)
+            + g
+            + parts.heading_ref * z2
+            + tilt_ref * (1.0 - z2)
+    })
+}
+
 /// The stated covariance (rad², world frame) and the variances along the state's principal
-/// directions: `dirs` the principal directions at the mode (world frame, unit), `var` the
-/// filter's variances along them, `extra` a further covariance in the same frame (the process
-/// noise pending since the last correction), `calib` the factors and the tilt reference's
-/// variance, `heading_ref` the heading reference's variance (rad²), `gap` the variance (rad² per
-/// axis) that gyroscope gaps have added, which is physical and in the filter's covariance
-/// unscaled: it is stated as it is, not scaled. Returns `(C, v)` with `trace C = Σ v`.
+/// directions: `dirs` the principal directions at the mode (world frame, orthonormal), `extra`
+/// the pending process noise in the same frame, `parts` the rest. The pending noise enters in
+/// the principal basis scaled as `D^½ Ñ D^½` (a congruence: it stays positive semi-definite);
+/// the references' variances about the world axes. Returns `(C, v)`, `v` those of
+/// [`stated_variances`], `trace C = Σ v`.
 pub(super) fn stated(
     dirs: &[Vector3<f64>; 3],
-    var: &[f64; 3],
     extra: &Matrix3<f64>,
-    calib: &Calibration,
-    heading_ref: f64,
-    gap: f64,
+    parts: &Parts,
 ) -> (Matrix3<f64>, [f64; 3]) {
-    let tilt_ref = calib.tilt_reference_variance();
-    let s: [f64; 3] = std::array::from_fn(|i| calib.scale_along(&dirs[i]));
+    let z = [dirs[0].z, dirs[1].z, dirs[2].z];
+    let noise: [f64; 3] = std::array::from_fn(|i| (dirs[i].transpose() * extra * dirs[i])[0]);
+    let v = stated_variances(&z, &noise, parts);
+    let s: [f64; 3] = std::array::from_fn(|i| parts.scale_along(z[i] * z[i]));
+    let tilt_ref = parts.tilt_ref;
     let mut c = Matrix3::zeros();
-    let mut v = [0.0; 3];
-    // the pending noise in the principal basis, scaled as D^½ Ñ D^½ (a congruence: it stays
-    // positive semi-definite)
     for i in 0..3 {
         for j in 0..3 {
-            let nij = (dirs[i].transpose() * extra * dirs[j])[0] * (s[i] * s[j]).sqrt();
-            let mut cij = nij;
-            if i == j {
-                cij += var[i].max(0.0) * s[i];
-                let z2 = dirs[i].z * dirs[i].z;
-                // the gaps' variance is in `var` scaled by s: state it at its physical size
-                let g = (gap * (1.0 - s[i])).max(0.0);
-                v[i] = cij.max(0.0) + g + heading_ref * z2 + tilt_ref * (1.0 - z2).max(0.0);
-                c += dirs[i] * dirs[i].transpose() * g;
-            }
+            let cij = if i == j {
+                // the diagonal as stated_variances has it, the references' parts apart
+                let z2 = (z[i] * z[i]).min(1.0);
+                v[i] - parts.heading_ref * z2 - tilt_ref * (1.0 - z2)
+            } else {
+                (dirs[i].transpose() * extra * dirs[j])[0] * (s[i] * s[j]).sqrt()
+            };
             c += dirs[i] * dirs[j].transpose() * cij;
         }
     }
     c[(0, 0)] += tilt_ref;
     c[(1, 1)] += tilt_ref;
-    c[(2, 2)] += heading_ref;
+    c[(2, 2)] += parts.heading_ref;
     (c, v)
 }
 
@@ -185,7 +225,7 @@ pub(super) struct Inhomogeneity {
     /// The smoothed norm and dip, and the seconds smoothed so far.
     smooth: (f64, f64),
     smoothed: f64,
-    /// The averages of the relative norm, the dip and their squares.
+    /// The averages of the smoothed norm, the dip and their squares.
     norm: Average,
     norm2: Average,
     dip: Average,
@@ -210,8 +250,7 @@ impl Inhomogeneity {
             return;
         }
         let alpha = (h / CALIBRATION_TIME).min(1.0);
-        // the norm relative to its own average: the log, whose variance is the relative one
-        let n = self.smooth.0.ln();
+        let n = self.smooth.0;
         self.norm.push(n, alpha);
         self.norm2.push(n * n, alpha);
         self.dip.push(self.smooth.1, alpha);
@@ -222,6 +261,13 @@ impl Inhomogeneity {
     /// norm's and the dip's variances (0 before there are any).
     pub(super) fn variance(&self) -> f64 {
         let var = |m: &Average, m2: &Average| (m2.value() - m.value() * m.value()).max(0.0);
-        0.5 * (var(&self.norm, &self.norm2) + var(&self.dip, &self.dip2))
+        // the norm's variance relative to its mean's square
+        let mean = self.norm.value();
+        let norm = if mean > 0.0 {
+            var(&self.norm, &self.norm2) / (mean * mean)
+        } else {
+            0.0
+        };
+        0.5 * (norm + var(&self.dip, &self.dip2))
     }
 }
