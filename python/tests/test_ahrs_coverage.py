@@ -1,0 +1,70 @@
+"""The AHRS's stated uncertainty against the truth (examples/python/ahrs_coverage.py): the share of
+samples whose error lies within 1x and 2x the stated spread, per axis group, on the shared BROAD
+trials and on the simulated suite (docs/accuracy/ahrs.md, "The stated uncertainty").
+
+The bounds are the figures measured when the stated uncertainty was introduced, with a margin of
+a few hundredths (they move with any change of the AHRS); the issue's target (0.50-0.85 within
+1x, at least 0.95 within 2x) is not yet met everywhere, and these assertions say where it is.
+"""
+
+import glob
+import os
+import sys
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "examples", "python"))
+import ahrs_coverage  # noqa: E402
+import ahrs_suite  # noqa: E402
+import broad  # noqa: E402
+
+TRIALS = sorted(glob.glob(os.path.join(broad.data_dir(None), "*.npz")))
+
+
+def test_the_error_rotation_vector_is_the_world_frame_rotation_from_the_estimate():
+    # q_true = exp(phi/2) ⊗ q_est for a known phi about the world's axes
+    rng = np.random.default_rng(3)
+    q = rng.normal(size=(50, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    phi = rng.normal(size=(50, 3)) * 0.3
+    ang = np.linalg.norm(phi, axis=1)
+    e = np.concatenate([np.cos(ang / 2)[:, None], np.sin(ang / 2)[:, None] * phi / ang[:, None]],
+                       axis=1)
+    truth = broad.qmul(e, q)
+    assert np.allclose(ahrs_coverage.qlog_world(q, truth), phi, atol=1e-12)
+
+
+def test_calibrated_draws_cover_as_a_normal_does():
+    # the reference the coverage is compared with: one N(0, C) draw per sample, within 1x of a
+    # one-dimensional spread 68 % of the time
+    rng = np.random.default_rng(4)
+    c = np.tile(np.diag([1e-4, 4e-4, 9e-4]), (20000, 1, 1))
+    d = ahrs_coverage.calibrated_draws(c, rng)
+    frac = np.mean(np.abs(d[:, 2]) <= 0.03)
+    assert abs(frac - 0.6827) < 0.01, frac
+
+
+@pytest.mark.skipif(len(TRIALS) != 9, reason="BROAD trials not found")
+def test_broad_heading_and_total_are_near_calibrated():
+    rows = [ahrs_coverage.broad_job((p, {})) for p in TRIALS]
+    p = ahrs_coverage.pooled([r for r in rows if r["name"] not in ahrs_coverage.APART])
+    # (within 1x, within 2x, calibrated 1x, calibrated 2x, RMS error / RMS spread)
+    heading, tilt, total = p["heading"], p["tilt"], p["total"]
+    assert 0.60 <= heading[0] <= 0.75 and heading[1] >= 0.88, heading
+    assert 0.60 <= total[0] <= 0.75 and total[1] >= 0.92, total
+    # tilt: the right share within 1x, heavy tails within 2x (trials 02, 07, 09)
+    assert 0.60 <= tilt[0] <= 0.75 and tilt[1] >= 0.85, tilt
+
+
+def test_the_suite_is_covered_without_being_ten_times_too_wide():
+    names = [n for n, _, _, _ in ahrs_suite.scenarios()][:26]
+    jobs = [(n, ov, settle, {}) for n, _, ov, settle in ahrs_suite.scenarios() if n in names]
+    rows = [ahrs_coverage.sim_job(j) for j in jobs]
+    p = ahrs_coverage.pooled(rows)
+    tilt, total = p["tilt"], p["total"]
+    # tilt meets the issue's target; the total is over-covered but no longer ~10x too wide
+    # (RMS error / RMS spread was 0.14 before the stated uncertainty)
+    assert 0.5 <= tilt[0] <= 0.85 and tilt[1] >= 0.95, tilt
+    assert total[1] >= 0.95 and total[4] >= 0.4, total
+    assert p["spearman"] > 0.2, p["spearman"]
