@@ -58,7 +58,7 @@
 //!
 //! The series is asymptotic (the terms `b_k μ_k ~ (2k s)^k` shrink while `k < a_min`), so the
 //! truncation alone reaches [`TOL`] for `a_min` from about 50; the tails `e2, e3 ~ e^{−a_min/2}`
-//! decide the switch-over, near `a_min ≈ 95` (`tests` locate it). Derivation also in
+//! decide the switch-over: the series is used from `a_min = 96` (d = 3) and `99` (d = 4) on (`tests` locate it). Derivation also in
 //! `docs/design.md` (§ "d = 3, 4: the concentrated series"). `src/mle/asymptotic.rs` holds the
 //! series of `1/ω_i` to a fixed order (no bound) that steers the MLE's Newton steps.
 
@@ -93,20 +93,26 @@ pub(crate) struct Series {
     pub omega: [f64; 4],
     /// The largest of the bounds on `|ω̂_i/ω_i − 1|` (every i) and on `|Δ log F|`.
     pub bound: f64,
-    /// Terms summed (`K + 1`).
+    /// Terms summed (`K + 1`; read by the tests).
+    #[cfg_attr(not(test), allow(dead_code))]
     pub terms: usize,
 }
 
 /// The series for canonical `z` of length 3 or 4, with its bound; `None` where it does not
-/// apply (other d, `a_min < MIN_A`, `a_max > MAX_A`) or its bound exceeds [`TOL`].
-pub(crate) fn evaluate(z: &[f64]) -> Option<Series> {
-    let series = evaluate_unchecked(z)?;
+/// apply (other d, `a_min < MIN_A`, `a_max > MAX_A`) or its bound exceeds [`TOL`]. `log F` only
+/// `with_log_f` (otherwise 0: ω alone saves the logarithms).
+pub(crate) fn evaluate(z: &[f64], with_log_f: bool) -> Option<Series> {
+    let series = evaluate_unchecked(z, with_log_f)?;
     (series.bound <= TOL).then_some(series)
 }
 
+/// Beyond this `a_min` the tails `e2, e3` are below 1e-300 (`e^{−7a_min/16}` underflows) and
+/// are not evaluated (two exponentials saved).
+const TAILS_VANISH: f64 = 1800.0;
+
 /// [`evaluate`] without the comparison of the bound with [`TOL`] (for the tests: the bound
 /// where the series is refused).
-pub(crate) fn evaluate_unchecked(z: &[f64]) -> Option<Series> {
+pub(crate) fn evaluate_unchecked(z: &[f64], with_log_f: bool) -> Option<Series> {
     let d = z.len();
     if !(d == 3 || d == 4) {
         return None;
@@ -172,26 +178,35 @@ pub(crate) fn evaluate_unchecked(z: &[f64]) -> Option<Series> {
         tilt *= TILT;
         t_minus_1 += b * mu[k];
         tail_t += b * tilt * mu[k];
+        nu = nu_next;
         for i in 0..n {
-            nu[i] = nu_next[i];
             u[i] += b * nu[i];
             tail_u[i] += b * tilt * nu[i];
         }
     }
     let t_hat = 1.0 + t_minus_1;
-    // the tails e2, e3 (in log space: a_min^{n/2} overflows for a_min near 1e300)
     let half_n = 0.5 * n as f64;
-    let ln_a = a_min.ln();
-    // ln(√2/Γ(n/2)): n = 2: ln √2; n = 3: ln(√2/(√π/2))
-    let ln_c = if n == 2 {
-        0.5 * std::f64::consts::LN_2
+    // the tails e2, e3 (in log space: a_min^{n/2} overflows for a_min near 1e300); beyond
+    // TAILS_VANISH e2 ≤ √2 a^{5/2} e^{−a/2} < 1e-380 and e3 ≤ 8^{5/2} e^{−7a/16} Σ… < 1e-330
+    // (the sums Σ b_k 8^k μ_k are below 2 there): zero to every digit that TOL can see
+    let (e2_t, e2_u, tilt_pref) = if a_min < TAILS_VANISH {
+        let ln_a = a_min.ln();
+        // ln(√2/Γ(n/2)): n = 2: ln √2; n = 3: ln(√2/(√π/2))
+        let ln_c = if n == 2 {
+            0.5 * std::f64::consts::LN_2
+        } else {
+            0.5 * std::f64::consts::LN_2 + std::f64::consts::LN_2 - 0.5 * std::f64::consts::PI.ln()
+        };
+        let e2_t = (half_n * ln_a - 0.5 * a_min + ln_c).exp();
+        // the same with a_min^{n/2+1}/Γ(n/2+1): times a_min/(n/2)
+        (
+            e2_t,
+            e2_t * a_min / half_n,
+            (half_n * TILT.ln() - (1.0 - 1.0 / TILT) * 0.5 * a_min).exp(),
+        )
     } else {
-        0.5 * std::f64::consts::LN_2 + std::f64::consts::LN_2 - 0.5 * std::f64::consts::PI.ln()
+        (0.0, 0.0, 0.0)
     };
-    let e2_t = (half_n * ln_a - 0.5 * a_min + ln_c).exp();
-    // the same with a_min^{n/2+1}/Γ(n/2+1): times a_min/(n/2)
-    let e2_u = e2_t * a_min / half_n;
-    let tilt_pref = (half_n * TILT.ln() - (1.0 - 1.0 / TILT) * 0.5 * a_min).exp();
     let delta_t = (trunc_t + e2_t + tilt_pref * tail_t) / t_hat;
     let mut out = Series {
         log_f: 0.0,
@@ -212,6 +227,9 @@ pub(crate) fn evaluate_unchecked(z: &[f64]) -> Option<Series> {
     }
     out.omega[n] = 1.0 - sum;
     out.bound = out.bound.max(last_err / out.omega[n]);
+    if !with_log_f {
+        return Some(out);
+    }
     // log F = log 2 + (n/2) log π − ½ Σ log a_i + log T̂
     let mut log_f = std::f64::consts::LN_2 + half_n * std::f64::consts::PI.ln();
     for &zi in &z[..n] {
@@ -295,7 +313,7 @@ mod tests {
                 (60.0, 1e12),
             ][(trial / 2) % 6];
             let z = random_z(&mut rng, d, lo, hi);
-            let Some(s) = evaluate(&z) else {
+            let Some(s) = evaluate(&z, true) else {
                 refused += 1;
                 continue;
             };
@@ -342,8 +360,8 @@ mod tests {
             let mut switch = None;
             for a_min in (80..=140).rev() {
                 let z: Vec<f64> = base.iter().map(|v| v * a_min as f64).collect();
-                let s = evaluate_unchecked(&z).unwrap();
-                assert_eq!(evaluate(&z).is_some(), s.bound <= TOL);
+                let s = evaluate_unchecked(&z, true).unwrap();
+                assert_eq!(evaluate(&z, true).is_some(), s.bound <= TOL);
                 // once refused, refused for every smaller a_min
                 assert!(
                     switch.is_none() || s.bound > TOL,
@@ -361,19 +379,23 @@ mod tests {
             assert!((85..=110).contains(&switch), "{switch}");
         }
         // not below MIN_A, nor beyond MAX_A, nor for d = 2 or 5, nor with a tie at the mode
-        assert!(evaluate_unchecked(&[-1e3, -79.0, 0.0]).is_none());
-        assert!(evaluate_unchecked(&[-1e301, -1e3, 0.0]).is_none());
-        assert!(evaluate_unchecked(&[-1e3, 0.0]).is_none());
-        assert!(evaluate_unchecked(&[-1e3, -1e3, -1e3, -1e3, 0.0]).is_none());
-        assert!(evaluate_unchecked(&[-1e3, 0.0, 0.0]).is_none());
+        assert!(evaluate_unchecked(&[-1e3, -79.0, 0.0], true).is_none());
+        assert!(evaluate_unchecked(&[-1e301, -1e3, 0.0], true).is_none());
+        assert!(evaluate_unchecked(&[-1e3, 0.0], true).is_none());
+        assert!(evaluate_unchecked(&[-1e3, -1e3, -1e3, -1e3, 0.0], true).is_none());
+        assert!(evaluate_unchecked(&[-1e3, 0.0, 0.0], true).is_none());
     }
 
-    /// The terms fall off fast where the AHRS works (every concentration in the thousands).
+    /// The terms fall off fast where the AHRS works (every concentration in the thousands); ω
+    /// without log F is the same.
     #[test]
     fn few_terms_at_the_filters_concentrations() {
-        let s = evaluate(&[-9000.0, -6500.0, -3000.0, 0.0]).unwrap();
+        let z = [-9000.0, -6500.0, -3000.0, 0.0];
+        let s = evaluate(&z, true).unwrap();
         assert!(s.terms <= 8, "{}", s.terms);
-        let s = evaluate(&[-1e12, -1e12, 0.0]).unwrap();
+        // ω alone is the same ω
+        assert_eq!(evaluate(&z, false).unwrap().omega, s.omega);
+        let s = evaluate(&[-1e12, -1e12, 0.0], true).unwrap();
         assert!(s.terms <= 3, "{}", s.terms);
     }
 }

@@ -105,7 +105,7 @@ pub(crate) fn log_f_canonical(
     // d = 3, 4 concentrated (every concentration below the mode ≳ 95): the series, where its
     // error bound is below `concentrated::TOL`; otherwise (and for the Hessian) the exact path
     if hess.is_none() && (z.len() == 3 || z.len() == 4) {
-        if let Some(series) = concentrated::evaluate(z) {
+        if let Some(series) = concentrated::evaluate(z, true) {
             if let Some(g) = grad {
                 g.copy_from_slice(&series.omega[..z.len()]);
             }
@@ -131,6 +131,13 @@ pub(crate) fn omega_canonical(z: &[f64], grad: &mut [f64]) -> Result<()> {
         grad[0] = w1;
         grad[1] = w2;
         return Ok(());
+    }
+    if z.len() == 3 || z.len() == 4 {
+        debug_assert!(is_canonical(z) && grad.len() == z.len());
+        if let Some(series) = concentrated::evaluate(z, false) {
+            grad.copy_from_slice(&series.omega[..z.len()]);
+            return Ok(());
+        }
     }
     log_f_canonical(z, Some(grad), None).map(|_| ())
 }
