@@ -81,6 +81,18 @@ const MAX_A: f64 = 1e300;
 /// its share of [`TOL`] within about 30 terms at `a_min = 80`, fewer than 10 from 2000 up).
 const MAX_TERMS: usize = 48;
 
+/// `1/(2k)` for `k = 1..=MAX_TERMS` (entry 0 unused): the recursion of `μ_k` multiplies
+/// instead of dividing (a division in its dependency chain per term).
+const INV_2K: [f64; MAX_TERMS + 1] = {
+    let mut t = [0.0; MAX_TERMS + 1];
+    let mut k = 1;
+    while k <= MAX_TERMS {
+        t[k] = 1.0 / (2 * k) as f64;
+        k += 1;
+    }
+    t
+};
+
 /// `1/(1 − θ)` of the tilt in the bound `e3` (θ = 7/8).
 const TILT: f64 = 8.0;
 
@@ -156,7 +168,7 @@ pub(crate) fn evaluate_unchecked(z: &[f64], with_log_f: bool) -> Option<Series> 
         for l in 1..=kn {
             acc += q[l] * mu[kn - l];
         }
-        mu[kn] = acc / (2 * kn) as f64;
+        mu[kn] = acc * INV_2K[kn];
         let mut nu_next = [0.0f64; 3];
         for i in 0..n {
             nu_next[i] = s[i] * mu[kn] + two_s[i] * nu[i];
@@ -207,26 +219,37 @@ pub(crate) fn evaluate_unchecked(z: &[f64], with_log_f: bool) -> Option<Series> 
     } else {
         (0.0, 0.0, 0.0)
     };
-    let delta_t = (trunc_t + e2_t + tilt_pref * tail_t) / t_hat;
+    // 1/(1 − δ) ≤ 1 + 2δ for δ ≤ ½ (no divisions but the two reciprocals); a δ above ½
+    // makes the bound infinite
+    let widen = |delta: f64| {
+        if delta <= 0.5 {
+            1.0 + 2.0 * delta
+        } else {
+            f64::INFINITY
+        }
+    };
+    let inv_t = 1.0 / t_hat;
+    let delta_t = (trunc_t + e2_t + tilt_pref * tail_t) * inv_t;
     let mut out = Series {
         log_f: 0.0,
         omega: [0.0; 4],
-        bound: delta_t / (1.0 - delta_t),
+        bound: delta_t * widen(delta_t),
         terms: k + 1,
     };
     let mut sum = 0.0;
     let mut last_err = 0.0;
     for i in 0..n {
         let delta_u = (trunc_u[i] + e2_u * s[i] + tilt_pref * TILT * tail_u[i]) / u[i];
-        let rel = (delta_t + delta_u) / (1.0 - delta_u);
-        let w = u[i] / t_hat;
+        let rel = (delta_t + delta_u) * widen(delta_u);
+        let w = u[i] * inv_t;
         out.omega[i] = w;
         sum += w;
         last_err += w * rel;
         out.bound = out.bound.max(rel);
     }
     out.omega[n] = 1.0 - sum;
-    out.bound = out.bound.max(last_err / out.omega[n]);
+    // relative to ω_{d−1} ≥ 1 − Σ 1/(2 a_i) > 0.98 (a_i ≥ MIN_A): at most twice the error
+    out.bound = out.bound.max(2.0 * last_err);
     if !with_log_f {
         return Some(out);
     }
