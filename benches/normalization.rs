@@ -1,10 +1,14 @@
 //! log F + gradient (and, for d = 3, 4, + Hessian, as the MLE's Newton steps ask) across the
 //! range (criterion). Targets: d = 2 ≤ 40 ns, d = 4 log F + ∇ ≤ 0.8 µs.
 //! `d4_path` runs the d = 4 quadrature on each compiled kernel this CPU supports
-//! (`Path::detected` picks one of them for every other call).
+//! (`Path::detected` picks one of them for every other call). `omega_concentrated_d4`: ω of a
+//! concentrated d = 4 Bingham through the distribution (the concentrated series) against the
+//! public log F + ∇ (the quadrature).
 
 use bingham::normalization::{log_f_with_path, log_normalization_into, Method, Path};
+use bingham::Bingham;
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
+use nalgebra::{DMatrix, DVector};
 
 fn cases(d: usize) -> Vec<(&'static str, Vec<f64>)> {
     match d {
@@ -87,6 +91,24 @@ fn bench(c: &mut Criterion) {
                 });
             }
         }
+    }
+    g.finish();
+    // ω of a concentrated d = 4 Bingham (the AHRS's posteriors: every |z| in the thousands):
+    // through the distribution (the crate's callers: the concentrated series where its bound
+    // holds) against the public log F + ∇ (always the quadrature)
+    let mut g = c.benchmark_group("omega_concentrated_d4");
+    for z in [[-9000.0, -6500.0, -3000.0, 0.0], [-4e4, -4e4, -2e3, 0.0]] {
+        let name = format!("({},{},{},0)", z[0], z[1], z[2]);
+        let b4 = Bingham::new(DMatrix::identity(4, 4), DVector::from_column_slice(&z)).unwrap();
+        g.bench_function(BenchmarkId::new("bingham_omega", &name), |b| {
+            b.iter(|| black_box(&b4).omega().unwrap())
+        });
+        g.bench_function(BenchmarkId::new("quadrature", &name), |b| {
+            let mut grad = [0.0; 4];
+            b.iter(|| {
+                log_normalization_into(black_box(&z), Method::Exact, Some(&mut grad), None).unwrap()
+            })
+        });
     }
     g.finish();
     let mut g = c.benchmark_group("log_f_grad_general");

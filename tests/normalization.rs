@@ -2,6 +2,7 @@
 //! offline (`scripts/reference_normalization.py`), brute-force sphere quadrature, and identities.
 
 use bingham::normalization::{evaluate, log_normalization_into, Method};
+use bingham::Bingham;
 use testkit::{gauss_legendre, read_reference, rel, Rng64};
 
 /// Checks every reference row of dimension d; returns (max rel err of F, max rel err of ω).
@@ -273,4 +274,110 @@ fn bad_input_is_an_error() {
     assert!(evaluate(&[f64::INFINITY, 0.0, 1.0], Method::Exact, false).is_err());
     let mut g = [0.0; 2];
     assert!(log_normalization_into(&[0.0, 0.0, 0.0], Method::Exact, Some(&mut g), None).is_err());
+}
+
+/// `log F` (of `z`, unshifted) and `ω` (in the order of `z` sorted ascending) through the
+/// distribution, i.e. the crate's own callers (`log_f_canonical`).
+fn through_bingham(z: &[f64]) -> (f64, Vec<f64>) {
+    let d = z.len();
+    let mut m = vec![0.0; d * d];
+    for i in 0..d {
+        m[i * d + i] = 1.0;
+    }
+    let b = Bingham::from_row_major(d, &m, z).unwrap();
+    let (lf, w) = b.log_normalization_and_omega().unwrap();
+    let zmax = z.iter().fold(f64::NEG_INFINITY, |a, &v| a.max(v));
+    (lf + zmax, w.as_slice().to_vec())
+}
+
+/// The crate's own callers take `log F` and `ω` of a concentrated d = 3, 4 Bingham from the
+/// series of `normalization::concentrated` where its error bound is below 1e-16 (every
+/// concentration below the mode from about 100): against the 65-digit references (the rows of
+/// `normalization_d{3,4}.csv` and `normalization_extreme.csv` with every concentration below the
+/// mode at least 100) and against the public path (always the quadrature) over random
+/// concentrated z, 100 to 1e12, with ties.
+#[test]
+fn concentrated_binghams_match_references_and_the_quadrature() {
+    // (z, log F, ω) of every reference row of d = 3, 4
+    let mut refs: Vec<(Vec<f64>, f64, Vec<f64>)> = Vec::new();
+    for d in [3, 4] {
+        for r in read_reference(d) {
+            refs.push((r.z, r.log_f, r.omega));
+        }
+    }
+    let path = format!(
+        "{}/tests/data/normalization_extreme.csv",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    for line in text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+    {
+        let v: Vec<f64> = line.split(',').map(|s| s.trim().parse().unwrap()).collect();
+        let d = v[0] as usize;
+        if d == 3 || d == 4 {
+            refs.push((v[1..=d].to_vec(), v[d + 1], v[d + 2..2 * d + 2].to_vec()));
+        }
+    }
+    let (mut rows, mut ew, mut ef) = (0, 0.0f64, 0.0f64);
+    for (z, log_f, omega) in &refs {
+        let d = z.len();
+        let mut idx: Vec<usize> = (0..d).collect();
+        idx.sort_by(|&a, &b| z[a].total_cmp(&z[b]));
+        let a_min = z[idx[d - 1]] - z[idx[d - 2]];
+        let a_max = z[idx[d - 1]] - z[idx[0]];
+        if !(a_min >= 100.0 && a_max <= 1e300) {
+            continue;
+        }
+        rows += 1;
+        let (lf, w) = through_bingham(z);
+        let errf = (lf - log_f).abs() / log_f.abs().max(1.0);
+        assert!(errf <= 2e-15, "z={z:?}: log F {lf} vs {log_f} ({errf:e})");
+        ef = ef.max(errf);
+        for (k, &i) in idx.iter().enumerate() {
+            let err = rel(w[k], omega[i], 0.0);
+            assert!(
+                err <= 2e-15,
+                "z={z:?}: ω{i} {} vs {} ({err:e})",
+                w[k],
+                omega[i]
+            );
+            ew = ew.max(err);
+        }
+    }
+    println!("{rows} reference rows: max rel Δ log F {ef:e}, max rel Δω {ew:e}");
+    assert!(rows >= 15, "{rows} rows");
+    let mut rng = Rng64(35);
+    let (mut ew, mut ef, mut es) = (0.0f64, 0.0f64, 0.0f64);
+    for trial in 0..2000 {
+        let d = 3 + trial % 2;
+        let mut z: Vec<f64> = (0..d - 1)
+            .map(|_| -(10f64).powf(2.0 + 10.0 * rng.uniform()))
+            .collect();
+        if trial % 5 == 0 {
+            z[1] = z[0]; // a tie
+        }
+        z.push(0.0);
+        let (lf, w) = through_bingham(&z);
+        let e = evaluate(&z, Method::Exact, false).unwrap();
+        let mut sorted: Vec<(f64, f64)> = z.iter().copied().zip(e.grad.iter().copied()).collect();
+        sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let errf = (lf - e.log_f).abs() / e.log_f.abs().max(1.0);
+        assert!(
+            errf <= 3e-15,
+            "z={z:?}: log F {lf} vs {} ({errf:e})",
+            e.log_f
+        );
+        ef = ef.max(errf);
+        for (k, (_, want)) in sorted.iter().enumerate() {
+            let err = rel(w[k], *want, 0.0);
+            assert!(err <= 3e-15, "z={z:?}: ω{k} {} vs {want} ({err:e})", w[k]);
+            ew = ew.max(err);
+        }
+        let sum: f64 = w.iter().sum();
+        es = es.max((sum - 1.0).abs());
+        assert!((sum - 1.0).abs() <= 2.0 * f64::EPSILON, "Σω = {sum}");
+    }
+    println!("random: max rel Δ log F {ef:e}, max rel Δω {ew:e}, max |Σω − 1| {es:e}");
 }
