@@ -8,12 +8,14 @@
 //! rough recording larger ones. In a linear-Gaussian filter, multiplying every noise
 //! variance by one factor `s` leaves the gain and the estimate unchanged and multiplies every
 //! covariance by `s`; and the innovations measure `s`: the normalized innovation squared per
-//! degree of freedom (module `health`) has mean `s` when the true noises are `s` times the
-//! model's. So the AHRS states the covariance of the filter with its noises scaled by the
-//! innovations' own average, tilt and heading apart (the accelerometer and the magnetometer
-//! are different sensors with different errors): `s_t` and `s_h`, averages over
-//! [`CALIBRATION_TIME`] of the tilt and heading innovations' `ν` per degree of freedom. The
-//! estimate does not change; the stated spread does.
+//! degree of freedom (module `health`), over its mean when the model holds (`expected_nis` in
+//! module `health`: the low-passed measurement's error is correlated with the state that
+//! followed it), has mean `s` when the true noises are `s` times the model's. So the AHRS
+//! states the covariance of the filter with its noises scaled by the innovations' own average,
+//! tilt and heading apart (the accelerometer and the magnetometer are different sensors with
+//! different errors): `s_t` and `s_h`, averages of those ratios over [`CALIBRATION_TIME`],
+//! blended in from 1 over [`STARTUP_TIME`] of corrections. The estimate does not change; the
+//! stated spread does.
 //!
 //! A principal direction `u` of the state (world frame) takes the factor
 //! `s(u) = s_t (1 − u_z²) + s_h u_z²`, the share of its variance in tilt and in heading.
@@ -28,10 +30,9 @@
 //! each horizontal axis's variance gains the mean over [`CALIBRATION_TIME`] of the squared
 //! relative deviation `((|ā| − g)/g)²` times that weight squared.
 //!
-//! Likewise the
-//! heading's reference is the local magnetic field, which indoors deviates from the Earth's by
-//! degrees from place to place; the state follows the local field, so the innovations stay
-//! small while the heading is off by the deviation. The magnetometer shows the field's
+//! Likewise the heading's reference is the local magnetic field, which indoors deviates from
+//! the Earth's by degrees from place to place; the state follows the local field, so the
+//! innovations stay small while the heading is off by the deviation. The magnetometer shows the field's
 //! inhomogeneity in what it can see — the changes of the field's dip and norm as the sensor
 //! moves — and a deviation with no preferred direction is as large in the horizontal
 //! direction (heading) as in the vertical (dip) and along the field (norm). So the heading's

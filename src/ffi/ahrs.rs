@@ -530,10 +530,15 @@ pub unsafe extern "C" fn bingham_ahrs_set_state(
     })
 }
 
-/// The angular spread of the state (radians), as `bingham_angular_spread()`: `spread[0..3]`
-/// along the principal directions (columns 0..2 of the state's M), `spread[3]` the total (the
-/// RMS of `2 sin(θ/2)`, θ the rotation angle between the truth and the estimate under the
-/// state: ≈ the RMS angular error when the filter is calibrated).
+/// The stated angular spread of the orientation (radians): `spread[0..3]` the standard
+/// deviations along the state's principal directions (columns 0..2 of the state's M),
+/// `spread[3]` the total (≈ the RMS angle between the truth and the estimate): the square roots
+/// of the variances of `bingham_ahrs_orientation_covariance()` along those directions and of its
+/// trace. The state's own spread (`bingham_angular_spread()` of the state, plus the process
+/// noise since the last correction) scaled by what the accelerometer's and the magnetometer's
+/// innovations show (tilt and heading apart) and widened by the errors of the tilt and heading
+/// references that the sensors show (docs/design.md, "Stated uncertainty"; coverage measured in
+/// docs/accuracy/ahrs.md, "The stated uncertainty").
 ///
 /// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `spread`), `BINGHAM_ERR_NUMERICAL` (the moments
 /// of an extremely concentrated state, e.g. one set with `bingham_ahrs_set_state()` near the
@@ -643,9 +648,9 @@ pub unsafe extern "C" fn bingham_ahrs_gyro_bias_covariance(
 /// `sensor_msgs/Imu.orientation_covariance`: the error as a rotation vector `phi` in the world
 /// frame (ENU: x east, y north, z up; REP 103), `q_true = exp(phi/2) ⊗ q_est`, with `q_est`
 /// the orientation of `bingham_ahrs_quaternion()` (sensor → world). From the state's second
-/// moments plus the process noise since the last correction: its trace is the square of the
-/// total angular spread (`bingham_ahrs_angular_spread()`'s `spread[3]`). Before the first
-/// sample: the identity (a uniform orientation's spread).
+/// moments plus the process noise since the last correction, scaled and widened as
+/// `bingham_ahrs_angular_spread()` says: its trace is the square of the total angular spread
+/// (`spread[3]`). Before the first sample: the identity (a uniform orientation's spread).
 ///
 /// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `cov`), `BINGHAM_ERR_NUMERICAL` (internal). On
 /// error nothing is written.
