@@ -239,6 +239,8 @@ impl Ahrs {
         }
         self.sample_state.omega = [omega[0], omega[1], omega[2], omega[3]];
         self.sample_state.bias.pending = Matrix3::zeros();
+        // the new state carries none of the gaps' variance (module `uncertainty`)
+        self.sample_state.gyro.gap_stated = 0.0;
         Ok(())
     }
 
