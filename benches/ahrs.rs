@@ -9,9 +9,9 @@
 use bingham::ahrs::{Ahrs, AhrsParams};
 use bingham::filter::BinghamFilter;
 use bingham::observation::{noise_from_angle_std, vector_observation};
-use bingham::quaternion::q4;
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use testkit::Rng64;
+
+mod imu_stream;
 
 const DT: f64 = 0.01;
 
@@ -26,30 +26,11 @@ fn stream() -> Vec<Sample> {
     stream_at(DT)
 }
 
-/// 60 s of simulated IMU data at the sample time `dt`.
+/// 60 s of simulated IMU data at the sample time `dt` (the shared stream, `imu_stream.rs`).
 fn stream_at(dt: f64) -> Vec<Sample> {
-    let mut rng = Rng64(7);
-    let mut q = [1.0, 0.0, 0.0, 0.0];
-    let bias = [0.008, -0.008, 0.008];
-    (0..(60.0 / dt).round() as usize)
-        .map(|k| {
-            let t = k as f64 * dt;
-            let w = [
-                0.9 * (0.7 * t).sin() + 0.3 * (5.2 * t).sin(),
-                0.7 * (0.4 * t + 1.0).sin() + 0.25 * (3.8 * t).cos(),
-                1.2 * (0.3 * t + 0.5).sin(),
-            ];
-            q = q4::mul(
-                &q,
-                &q4::from_rotation_vector(&[w[0] * dt, w[1] * dt, w[2] * dt]),
-            );
-            let a = q4::rotate_inverse(&q, &[0.0, 0.0, 9.81]);
-            let m = q4::rotate_inverse(&q, &[0.0, 20.0, -40.0]);
-            let gyr = [0, 1, 2].map(|i| w[i] + bias[i] + 0.005 * rng.normal());
-            let acc = [0, 1, 2].map(|i| a[i] + 0.05 * rng.normal());
-            let mag = [0, 1, 2].map(|i| m[i] + 0.5 * rng.normal());
-            Sample { gyr, acc, mag }
-        })
+    imu_stream::stream(dt, (60.0 / dt).round() as usize)
+        .into_iter()
+        .map(|[gyr, acc, mag]| Sample { gyr, acc, mag })
         .collect()
 }
 

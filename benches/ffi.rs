@@ -27,13 +27,14 @@ use bingham::ffi::{
 };
 use bingham::filter::BinghamFilter;
 use bingham::normalization::{log_normalization_into, Method};
-use bingham::quaternion::{compose, q4};
+use bingham::quaternion::compose;
 use bingham::Bingham;
 use criterion::{black_box, criterion_group, criterion_main, BatchSize, Criterion};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use testkit::scenarios::{scenario_2d, simulate_with};
-use testkit::Rng64;
+
+mod imu_stream;
 
 /// A filter handle of the C ABI, freed on drop (outside the timing).
 struct CFilter(*mut bingham_filter);
@@ -170,30 +171,7 @@ fn bench_filter_step(c: &mut Criterion) {
 
 /// Samples of the 100 Hz stream of `benches/ahrs.rs` (gyroscope, accelerometer, magnetometer).
 fn stream(n: usize) -> Vec<[[f64; 3]; 3]> {
-    let dt = 0.01;
-    let mut rng = Rng64(7);
-    let mut q = [1.0, 0.0, 0.0, 0.0];
-    let bias = [0.008, -0.008, 0.008];
-    (0..n)
-        .map(|k| {
-            let t = k as f64 * dt;
-            let w = [
-                0.9 * (0.7 * t).sin() + 0.3 * (5.2 * t).sin(),
-                0.7 * (0.4 * t + 1.0).sin() + 0.25 * (3.8 * t).cos(),
-                1.2 * (0.3 * t + 0.5).sin(),
-            ];
-            q = q4::mul(
-                &q,
-                &q4::from_rotation_vector(&[w[0] * dt, w[1] * dt, w[2] * dt]),
-            );
-            let a = q4::rotate_inverse(&q, &[0.0, 0.0, 9.81]);
-            let m = q4::rotate_inverse(&q, &[0.0, 20.0, -40.0]);
-            let gyr = [0, 1, 2].map(|i| w[i] + bias[i] + 0.005 * rng.normal());
-            let acc = [0, 1, 2].map(|i| a[i] + 0.05 * rng.normal());
-            let mag = [0, 1, 2].map(|i| m[i] + 0.5 * rng.normal());
-            [gyr, acc, mag]
-        })
-        .collect()
+    imu_stream::stream(0.01, n)
 }
 
 fn bench_ahrs(c: &mut Criterion) {
