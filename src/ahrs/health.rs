@@ -205,20 +205,21 @@ impl HealthState {
         // The state's covariance (rad², body frame; see `covariance`).
         let sigma = covariance(lam);
         for ev in present(evidence) {
-            // the state's variance along what the sensor sees, per degree of freedom
-            let p = match &ev.innovation {
-                Innovation::Tilt { up, .. } => {
-                    0.5 * (sigma.trace() - (up.transpose() * sigma * up)[0]).max(0.0)
-                }
-                Innovation::Heading { up, .. } => (up.transpose() * sigma * up)[0].max(0.0),
+            // the state's variance along "up" (the heading's, and what the tilt does not see)
+            let (Innovation::Tilt { up, .. } | Innovation::Heading { up, .. }) = &ev.innovation;
+            let along_up = (up.transpose() * sigma * up)[0].max(0.0);
+            // the state's variance along what the sensor sees, per degree of freedom, and the
+            // normalized innovation
+            let (p, nis) = match &ev.innovation {
+                Innovation::Tilt { up, e, .. } => (
+                    0.5 * (sigma.trace() - along_up).max(0.0),
+                    tilt_nis(&sigma, up, e, ev.var) / ev.innovation.dof(),
+                ),
+                Innovation::Heading { angle, .. } => (
+                    along_up,
+                    angle * angle / (along_up + ev.var) / ev.innovation.dof(),
+                ),
             };
-            let nis = match &ev.innovation {
-                Innovation::Tilt { up, e, .. } => tilt_nis(&sigma, up, e, ev.var),
-                Innovation::Heading { up, angle } => {
-                    let var = (up.transpose() * sigma * up)[0].max(0.0) + ev.var;
-                    angle * angle / var
-                }
-            } / ev.innovation.dof();
             let scale = nis / expected_nis(p, ev.var);
             match &ev.innovation {
                 Innovation::Tilt { angle, .. } => {
