@@ -13,7 +13,7 @@ use nalgebra::{DMatrix, DVector, DefaultAllocator, Dim, Dyn};
 use crate::canonical::{check_normalize, normalize_eigen, params_row_major, unit};
 pub use crate::canonical::{ORTHOGONALITY_TOL, UNIT_TOL};
 use crate::error::{check_dim, check_finite, Error, Result};
-use crate::linalg::{congruence, sym_eigen, symmetrize, Square, Vector};
+use crate::linalg::{congruence, sym_eigen, Square, Vector};
 use crate::normalization::{log_f_canonical, omega_canonical};
 use crate::quaternion::{left, right};
 
@@ -245,27 +245,10 @@ pub(crate) fn product_eigen_precision<D: Dim>(
 where
     DefaultAllocator: Allocator<D, D> + Allocator<D>,
 {
-    // d ≥ 3: in the basis of `m1`, `diag(z1) + m1ᵀ P2 m1`, whose eigenvectors `V'` give
-    // `V = m1 V'` (the same eigenvalues; the same accuracy, a few ulps of the norm): nearly
-    // diagonal when `P2` is small next to the state's concentrations (a filter's update, the
-    // AHRS's corrections), so the Jacobi iteration ends a sweep or two sooner. d = 2 keeps the
-    // direct form (one closed-form rotation either way).
-    let in_basis = m1.nrows() >= 3;
-    let mut c = if in_basis {
-        let mut c = m1.transpose() * p2 * m1;
-        for i in 0..c.nrows() {
-            c[(i, i)] += z1[i];
-        }
-        symmetrize(&c)
-    } else {
-        let mut c = congruence(m1, z1);
-        for (v, p) in c.iter_mut().zip(p2.iter()) {
-            *v += p;
-        }
-        c
-    };
+    let mut c = congruence(m1, z1);
     let mut big: f64 = 0.0;
-    for v in c.iter() {
+    for (v, p) in c.iter_mut().zip(p2.iter()) {
+        *v += p;
         big = big.max(v.abs());
     }
     if !big.is_finite() {
@@ -283,7 +266,6 @@ where
         c.iter_mut().for_each(|v| *v *= f);
     }
     let (v, mut l) = sym_eigen(&c)?;
-    let v = if in_basis { m1 * v } else { v };
     if let Some(e) = scale {
         let f = 2f64.powi(e);
         l.iter_mut().for_each(|v| *v *= f);
