@@ -182,7 +182,11 @@ pub(super) fn evidence_precision(q: &[f64; 4], e: &Matrix4<f64>) -> Matrix3<f64>
 /// The pseudo-inverse of a symmetric `a` restricted to its positive part (eigenvalues below
 /// `1e-9` of the largest, and negative ones, count as zero: unobserved directions).
 pub(super) fn pinv(a: &Matrix3<f64>) -> Matrix3<f64> {
-    let e = SymmetricEigen::new((a + a.transpose()) * 0.5);
+    let s = (a + a.transpose()) * 0.5;
+    if let Some(inv) = well_conditioned_inverse(&s) {
+        return inv;
+    }
+    let e = SymmetricEigen::new(s);
     let top = e.eigenvalues.iter().fold(0.0f64, |m, &v| m.max(v));
     let l = e.eigenvalues.map(|v| {
         if v > 1e-9 * top && v > 0.0 {
@@ -192,6 +196,61 @@ pub(super) fn pinv(a: &Matrix3<f64>) -> Matrix3<f64> {
         }
     });
     e.eigenvectors * Matrix3::from_diagonal(&l) * e.eigenvectors.transpose()
+}
+
+/// Below this bound on the condition number `tr(A)·tr(A⁻¹)` a positive definite `A` has no
+/// eigenvalue under `1e-9` of its largest (with a factor 10 to spare for the rounding of the
+/// traces), so [`pinv`] is its inverse.
+const PINV_DIRECT: f64 = 1e8;
+
+/// The inverse of a symmetric `s` by Cholesky when `s` is positive definite and
+/// `tr(s)·tr(s⁻¹) < PINV_DIRECT`: then every eigenvalue `λ_i ≥ 1/tr(s⁻¹) > 1e-9·tr(s) ≥
+/// 1e-9·λ_max`, so the pseudo-inverse of [`pinv`] keeps every direction and is the inverse
+/// (the same matrix to rounding, without the eigendecomposition: a correction's commonest
+/// case, every direction observed). `None` otherwise (not positive definite, nearly singular
+/// or non-finite): [`pinv`] then takes the eigendecomposition.
+fn well_conditioned_inverse(s: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    // s = L Lᵀ
+    let l00 = s[(0, 0)];
+    if !(l00 > 0.0) {
+        return None;
+    }
+    let l00 = l00.sqrt();
+    let l10 = s[(1, 0)] / l00;
+    let l20 = s[(2, 0)] / l00;
+    let d1 = s[(1, 1)] - l10 * l10;
+    if !(d1 > 0.0) {
+        return None;
+    }
+    let l11 = d1.sqrt();
+    let l21 = (s[(2, 1)] - l20 * l10) / l11;
+    let d2 = s[(2, 2)] - l20 * l20 - l21 * l21;
+    if !(d2 > 0.0) {
+        return None;
+    }
+    let l22 = d2.sqrt();
+    // W = L⁻¹ (lower triangular), s⁻¹ = Wᵀ W
+    let w00 = 1.0 / l00;
+    let w11 = 1.0 / l11;
+    let w22 = 1.0 / l22;
+    let w10 = -l10 * w00 * w11;
+    let w21 = -l21 * w11 * w22;
+    let w20 = -(l20 * w00 + l21 * w10) * w22;
+    let i00 = w00 * w00 + w10 * w10 + w20 * w20;
+    let i11 = w11 * w11 + w21 * w21;
+    let i22 = w22 * w22;
+    let i10 = w10 * w11 + w20 * w21;
+    let i20 = w20 * w22;
+    let i21 = w21 * w22;
+    let cond = s.trace() * (i00 + i11 + i22);
+    if !(cond < PINV_DIRECT) {
+        return None;
+    }
+    Some(Matrix3::new(
+        i00, i10, i20, //
+        i10, i11, i21, //
+        i20, i21, i22,
+    ))
 }
 
 /// The second moment of a rotation noise `exp(θ/2)` whose rotation vector has the covariance
@@ -256,6 +315,61 @@ mod tests {
         let e = m * Matrix4::from_diagonal(&z) * m.transpose();
         let h = evidence_precision(&qh, &e);
         assert!((h - lam).norm() < 1e-9 * lam.norm(), "{h} vs {lam}");
+    }
+
+    #[test]
+    fn pinv_direct_path_matches_the_constructed_inverse() {
+        // random orthogonal bases, eigenvalues spread over 1 to 12 decades, some directions
+        // zero or negative (the eigendecomposition's cases), the rest positive definite
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut uniform = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut direct, mut by_eigen) = (0, 0);
+        for k in 0..3000 {
+            let q = q4::from_rotation_vector(&[
+                6.0 * uniform() - 3.0,
+                6.0 * uniform() - 3.0,
+                6.0 * uniform() - 3.0,
+            ]);
+            let r = q4::to_matrix(&q);
+            let r = Matrix3::from_fn(|i, j| r[i][j]);
+            let decades = 1.0 + 11.0 * uniform();
+            let top = 10f64.powf(8.0 * uniform() - 2.0);
+            let mut l = Vector3::from_fn(|_, _| top * 10f64.powf(-decades * uniform()));
+            l[0] = top;
+            match k % 10 {
+                0 => l[2] = 0.0,
+                1 => l[1] = -1e-3 * top,
+                _ => {}
+            }
+            let a = r * Matrix3::from_diagonal(&l) * r.transpose();
+            // the pseudo-inverse from the construction (eigenvalues below 1e-9 of the largest,
+            // and negative ones, dropped)
+            let inv = l.map(|v| if v > 1e-9 * top { 1.0 / v } else { 0.0 });
+            let want = r * Matrix3::from_diagonal(&inv) * r.transpose();
+            let got = pinv(&a);
+            // the direct path (the one this test is about) within a few ulps times the
+            // condition number, and only where every direction is kept; the rest goes to the
+            // eigendecomposition as before
+            if well_conditioned_inverse(&((a + a.transpose()) * 0.5)).is_none() {
+                by_eigen += 1;
+                continue;
+            }
+            direct += 1;
+            assert!(l.iter().all(|&v| v > 1e-9 * top), "{l}");
+            let cond = l.iter().fold(0.0, |m: f64, &v| m.max(v))
+                / l.iter().fold(f64::INFINITY, |m: f64, &v| m.min(v));
+            let err = (got - want).norm() / want.norm();
+            assert!(err < 1e-14 * cond, "eigenvalues {l}: error {err:e}");
+        }
+        assert!(
+            direct > 1000 && by_eigen > 600,
+            "{direct} direct, {by_eigen} by eigen"
+        );
     }
 
     #[test]

@@ -142,6 +142,24 @@ pub(crate) fn omega_canonical(z: &[f64], grad: &mut [f64]) -> Result<()> {
     log_f_canonical(z, Some(grad), None).map(|_| ())
 }
 
+/// `ω = ∇ log F(z)` by the series of `concentrated` into `grad` (length d) for canonical `z`
+/// ([`is_canonical`]) of d = 3, 4 where the series' error bound is below `concentrated::TOL`
+/// (every concentration below the mode ≳ 95); `false`, `grad` untouched, elsewhere (other d,
+/// `z` not canonical, the bound not met). The MLE's Newton iteration asks for it to know
+/// whether the series served (it then takes the Hessian from the series too).
+pub(crate) fn omega_series(z: &[f64], grad: &mut [f64]) -> bool {
+    if !((z.len() == 3 || z.len() == 4) && grad.len() == z.len() && is_canonical(z)) {
+        return false;
+    }
+    match concentrated::evaluate(z, false) {
+        Some(series) => {
+            grad.copy_from_slice(&series.omega[..z.len()]);
+            true
+        }
+        None => false,
+    }
+}
+
 /// [`log_normalization_into`] with the exact method and the d = 3, 4 quadrature on the given
 /// kernel (for tests and benchmarks; other d ignore `path`). Errors as
 /// [`log_normalization_into`], and `InvalidArgument` if the CPU cannot run `path`.
