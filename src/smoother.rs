@@ -97,7 +97,20 @@ pub struct SmoothOptions {
     pub bias: BiasMode,
     /// How the two passes' orientations are multiplied; default [`Fusion::Tangent`].
     pub fusion: Fusion,
+    /// Whether the backward pass starts from a uniform orientation (true) or, as the online
+    /// AHRS does, from its first sample's accelerometer and magnetometer (false, the default).
+    pub uniform_start: bool,
+    /// Whether the backward pass's gyroscope has the forward pass's final bias estimate taken
+    /// out (default true).
+    pub bias_start: bool,
+    /// The consistency gate: the squared Mahalanobis distance between the two passes above
+    /// which the backward covariance is widened by `distance² / gate` (0: no gate; default
+    /// [`DEFAULT_GATE`]).
+    pub gate: f64,
 }
+
+/// The default consistency gate of [`SmoothOptions::gate`].
+pub const DEFAULT_GATE: f64 = 16.0;
 
 /// How the forward posterior and the backward prediction are multiplied (docs/accuracy/ahrs.md,
 /// "The offline smoother", compares them).
@@ -116,6 +129,9 @@ impl Default for SmoothOptions {
         SmoothOptions {
             bias: BiasMode::Fused,
             fusion: Fusion::Tangent,
+            uniform_start: false,
+            bias_start: true,
+            gate: DEFAULT_GATE,
         }
     }
 }
@@ -407,13 +423,25 @@ fn run(
     let mut bp = *params;
     bp.mag_latency = 0.0;
     bp.acc_latency = 0.0;
+    // the backward pass's gyroscope: the forward pass's final bias estimate taken out, so that
+    // the backward bias estimate (of what remains) starts near zero instead of at the bias;
+    // its stated bias variance still starts at bias_std² (conservative: nothing counted twice)
+    let b_end = if options.bias_start {
+        ahrs.gyro_bias()
+    } else {
+        [0.0; 3]
+    };
     let mut back = Ahrs::new(&bp)?;
     if has_mag {
-        // uniform: the backward pass holds the future's evidence only
-        let eye = [
-            1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
-        ];
-        back.set_state(&eye, &[0.0; 4])?;
+        if options.uniform_start {
+            // uniform: the backward pass holds the future's evidence only
+            let eye = [
+                1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+            ];
+            back.set_state(&eye, &[0.0; 4])?;
+        }
+        // else: the AHRS's own start from its first sample (the recording's last): evidence of
+        // that sample only, which no forward posterior before it holds
     } else {
         // the heading's convention is the forward pass's start: carry it over
         let mut m = [0.0; 16];
@@ -425,12 +453,11 @@ fn run(
     for k in (0..n).rev() {
         // the backward pass's sample for sample k: the turn from k+1 to k, k's own sensors
         let (g, dt) = if k + 1 < n {
-            let g = input.gyr[k + 1];
-            ([-g[0], -g[1], -g[2]], step_time(input.time, k + 1, nominal))
+            (input.gyr[k + 1], step_time(input.time, k + 1, nominal))
         } else {
-            let g = input.gyr[k];
-            ([-g[0], -g[1], -g[2]], nominal)
+            (input.gyr[k], nominal)
         };
+        let g = [b_end[0] - g[0], b_end[1] - g[1], b_end[2] - g[2]];
         if started {
             // the predicted state at k: the state after k+1 turned by the gyroscope to k
             let b = back.gyro_bias();
@@ -440,12 +467,24 @@ fn run(
             } else {
                 back.quaternion()
             };
-            let cb = matrix9(&back.orientation_covariance()?);
+            let mut cb = matrix9(&back.orientation_covariance()?);
             let f = &mut fwd[k];
             let qf = f.q;
             let cf = unpack(&f.c);
             let d = q4::to_rotation_vector(&q4::mul(&qb, &q4::conj(&qf)));
-            if let Some((shift, cs)) = fuse(&cf, &cb, &Vector3::new(d[0], d[1], d[2])) {
+            let dv = Vector3::new(d[0], d[1], d[2]);
+            // the consistency gate: a backward state farther from the forward one than their
+            // covariances allow (a start, a magnetic reference taken in a disturbance) is
+            // widened until it is consistent
+            if options.gate > 0.0 {
+                if let Some(chol) = (cf + cb).cholesky() {
+                    let m2 = dv.dot(&chol.solve(&dv));
+                    if m2 > options.gate {
+                        cb *= m2 / options.gate;
+                    }
+                }
+            }
+            if let Some((shift, cs)) = fuse(&cf, &cb, &dv) {
                 let q = if exact {
                     // the backward exponent turned to k: p(q) = p_{k+1}(q ⊗ dq*)
                     let dq = q4::conj(&q4::mul(&q4::conj(&back.quaternion()), &qb));
@@ -471,7 +510,7 @@ fn run(
                 let fb = &mut bs[k];
                 let bf = Vector3::new(fb.b[0], fb.b[1], fb.b[2]).map(f64::from);
                 let pf = unpack(&fb.p);
-                let bb = Vector3::from(b).map(|x| -x);
+                let bb = Vector3::from(b_end) - Vector3::from(b);
                 let pb = matrix9(&back.gyro_bias_covariance());
                 if let Some((shift, ps)) = fuse(&pf, &pb, &(bb - bf)) {
                     let bsm = bf + shift;
@@ -533,7 +572,7 @@ mod tests {
             &qf,
         );
         let d = q4::to_rotation_vector(&q4::mul(&qb, &q4::conj(&qf)));
-        let (shift, cs) = fuse(&cf, &cb, &Vector3::new(d[0], d[1], d[2])).unwrap();
+        let (shift, cs) = fuse(&cf, &cb, &dv).unwrap();
         let lf = cf.cholesky().unwrap().l();
         let cb_inv = cb.try_inverse().unwrap();
         let n = 400_000;
