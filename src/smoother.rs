@@ -8,17 +8,21 @@
 //! runs over the reversed recording (the backward pass): the body turns by `−ω` in reversed
 //! time, so the backward pass's gyroscope sample for sample `k` is `−gyr[k+1]` (the forward
 //! pass turns by `gyr[k]` between samples `k−1` and `k`), its time step `t[k+1] − t[k]`, its
-//! gyroscope bias the negative of the forward's. It starts from a uniform orientation (with a
-//! magnetometer; without one, see below), so that its state holds the future samples' evidence
-//! only, and at sample `k` the smoother takes its *predicted* state: the state after sample
-//! `k+1` turned by the gyroscope to sample `k`, before sample `k`'s accelerometer and
-//! magnetometer, which the forward posterior holds already.
+//! gyroscope bias the negative of the forward's. It starts as the online AHRS does, from its
+//! first sample (the recording's last), whose evidence no forward posterior before it holds;
+//! at sample `k` the smoother takes its *predicted* state: the state after sample `k+1` turned
+//! by the gyroscope to sample `k`, before sample `k`'s accelerometer and magnetometer, which
+//! the forward posterior holds already. Its gyroscope has the forward pass's final bias
+//! estimate taken out, so that its bias estimate starts near the truth (its stated bias
+//! variance still starts at `bias_std²`).
 //!
 //! The product is formed in the tangent space of the forward mode with the stated (calibrated)
 //! covariances of both passes ([`Ahrs::orientation_covariance`]): with `δ` the rotation vector
 //! (world frame) from the forward mode to the backward one, `C_s = (C_f⁻¹ + C_b⁻¹)⁻¹`, the
 //! smoothed mode `exp(C_f (C_f + C_b)⁻¹ δ / 2) ⊗ q_f` and its covariance `C_s` (computed as
 //! `C_f − C_f (C_f + C_b)⁻¹ C_f`, which stays finite when the backward pass knows nothing).
+//! A backward state farther from the forward one than the two covariances allow (squared
+//! Mahalanobis distance above [`DEFAULT_GATE`]) has its covariance widened until it is not.
 //! The gyroscope bias is smoothed the same way from the two passes' estimates and covariances.
 //!
 //! Approximations (docs/design.md): the AHRS low-passes the accelerometer (`acc_tau`) and the
@@ -572,7 +576,7 @@ mod tests {
             &qf,
         );
         let d = q4::to_rotation_vector(&q4::mul(&qb, &q4::conj(&qf)));
-        let (shift, cs) = fuse(&cf, &cb, &dv).unwrap();
+        let (shift, cs) = fuse(&cf, &cb, &Vector3::new(d[0], d[1], d[2])).unwrap();
         let lf = cf.cholesky().unwrap().l();
         let cb_inv = cb.try_inverse().unwrap();
         let n = 400_000;
