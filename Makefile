@@ -163,7 +163,7 @@ API_TESTS := header api_mirrors doc_paths
 # programs (c_tests, last: it compiles C++ with Eigen when its sources or headers changed).
 UNIT_TESTS := ahrs ahrs_latency ahrs_timing deterministic dispatch distribution filter filter_alloc \
               filter_health general_d layering mle nonlinear normalization observation q4 \
-              saddlepoint special speed_figures spin threads world
+              saddlepoint smoother special speed_figures spin threads world
 C_TESTS := c_tests
 QUICK_TESTS := $(API_TESTS) $(UNIT_TESTS) $(C_TESTS)
 # The slow tier's binaries: the C ABI fuzz run, the long runs, the totality sweep, the paper

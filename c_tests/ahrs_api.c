@@ -56,6 +56,13 @@
  *   message naming the field; bingham_ahrs_mag_latency_estimate: NULLs, NOT_CONVERGED (output
  *   untouched) before informative motion, then the delay of a noise-free simulated spin with a
  *   changing rate and the magnetometer two samples late.
+ * - bingham_ahrs_smooth / _ex: a slow turn about z smoothed within 1 degree of the truth, unit
+ *   quaternions with w >= 0, the last row the online AHRS's bit for bit (n = 1 too); _ex with
+ *   uniformly spaced timestamps == the untimed call bit for bit, spread == sqrt(trace cov),
+ *   covariances symmetric, the bias finite; NaN rows and mag NULL processed; NULLs, a first
+ *   sample without gravity, a huge gyroscope row, a timestamp not increasing, a bad parameter,
+ *   n * 4 overflowing (arrays on an inaccessible page) refused with every output untouched;
+ *   n = 0 writes nothing.
  * - the health readout (bingham_ahrs_health): all zero before the first sample; after 5 s of the
  *   slow turn every field finite, score == max(gravity_score, tilt_score, heading_score),
  *   0 <= mag_rejected <= 1, a reference with the dip of the simulated field (atan(40/20) below
@@ -1766,6 +1773,104 @@ static void test_ahrs_orientation_covariance(void) {
     bingham_ahrs_free(a);
 }
 
+/* ---- bingham_ahrs_smooth, bingham_ahrs_smooth_ex -------------------------------------------------- */
+
+enum { SN = 400 };
+
+static void test_ahrs_smooth(void) {
+    const char *fn = "bingham_ahrs_smooth", *fx = "bingham_ahrs_smooth_ex";
+    static double g[3 * SN], acc[3 * SN], mag[3 * SN], t[SN];
+    static double q1[4 * SN], q2[4 * SN], s1[SN], s2[SN], b2[3 * SN], c2[9 * SN], qo[4 * SN];
+    bingham_ahrs_params p;
+    CHECK_OK(bingham_ahrs_params_default(0.01, &p));
+    /* the slow turn about z: the truth is the yaw 0.3 t, q = (cos(yaw/2), 0, 0, sin(yaw/2)) */
+    for (int k = 0; k < SN; ++k) {
+        sample(k, g + 3 * k, acc + 3 * k, mag + 3 * k);
+        t[k] = 500.0 + 0.01 * k;
+    }
+    CHECK_OK(bingham_ahrs_smooth(&p, SN, g, acc, mag, q1, s1));
+    double worst = 0.0;
+    int unit = 1;
+    for (int k = 0; k < SN; ++k) {
+        const double yaw = 0.3 * 0.01 * k, *q = q1 + 4 * k;
+        const double d = fabs(q[0] * cos(yaw / 2) + q[3] * sin(yaw / 2));
+        const double e = 2.0 * acos(d < 1.0 ? d : 1.0);
+        worst = e > worst ? e : worst;
+        unit &= fabs(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] - 1.0) < 1e-12 && q[0] >= 0.0;
+        unit &= isfinite(s1[k]) && s1[k] > 0.0;
+    }
+    CHECK(unit);
+    if (worst > 1.0 * PI / 180.0) fprintf(stderr, "    smooth: worst error %g deg\n", worst * 180.0 / PI);
+    CHECK(worst <= 1.0 * PI / 180.0);
+    /* the last sample has no future: it is the online AHRS's, bit for bit */
+    bingham_ahrs *a = new_ahrs(0.01);
+    if (!a) return;
+    CHECK_OK(bingham_ahrs_update_batch(a, SN, g, acc, mag, qo));
+    CHECK(memcmp(q1 + 4 * (SN - 1), qo + 4 * (SN - 1), 4 * sizeof(double)) == 0);
+    bingham_ahrs_free(a);
+    /* the extended call: uniformly spaced timestamps, the further outputs; the same rows bit for
+     * bit; the spread the square root of the covariance's trace; the bias near the truth's
+     * (0.001, -0.002, 0) rad/s */
+    CHECK_OK(bingham_ahrs_smooth_ex(&p, SN, t, g, acc, mag, q2, s2, b2, c2));
+    CHECK(memcmp(q1, q2, sizeof q1) == 0 && memcmp(s1, s2, sizeof s1) == 0);
+    int cov_ok = 1;
+    for (int k = 0; k < SN; ++k) {
+        const double *c = c2 + 9 * k, tr = c[0] + c[4] + c[8];
+        cov_ok &= fabs(sqrt(tr) - s2[k]) <= 1e-6 * s2[k] && c[1] == c[3] && c[2] == c[6] && c[5] == c[7];
+        cov_ok &= all_finite(b2 + 3 * k, 3) && fabs(b2[3 * k + 2]) < 0.01;
+    }
+    CHECK(cov_ok);
+    /* NaN rows in every channel (no sample) and mag NULL: processed */
+    for (int k = 0; k < SN; ++k) moving_sample(k, 1, g + 3 * k, acc + 3 * k, mag + 3 * k);
+    CHECK_OK(bingham_ahrs_smooth(&p, SN, g, acc, mag, q1, NULL));
+    CHECK_OK(bingham_ahrs_smooth(&p, SN, g, acc, NULL, q1, s1));
+    CHECK(all_finite(q1, 4 * SN) && all_finite(s1, SN));
+    for (int k = 0; k < SN; ++k) sample(k, g + 3 * k, acc + 3 * k, mag + 3 * k);
+    /* errors: nothing written, the message names the function (and the argument) */
+    fill(q1, sizeof q1), fill(s1, sizeof s1), fill(b2, sizeof b2), fill(c2, sizeof c2);
+    CHECK_STATUS(bingham_ahrs_smooth(NULL, SN, g, acc, mag, q1, s1), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "p");
+    CHECK_STATUS(bingham_ahrs_smooth(&p, SN, NULL, acc, mag, q1, s1), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "gyr");
+    CHECK_STATUS(bingham_ahrs_smooth(&p, SN, g, NULL, mag, q1, s1), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "acc");
+    CHECK_STATUS(bingham_ahrs_smooth(&p, SN, g, acc, mag, NULL, s1), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fn, "quat");
+    CHECK_STATUS(bingham_ahrs_smooth_ex(NULL, SN, t, g, acc, mag, q1, s1, b2, c2), BINGHAM_ERR_NULL_ARGUMENT);
+    check_null_msg(fx, "p");
+    /* the first sample without gravity: refused at sample 0 */
+    acc[2] = NAN;
+    CHECK_STATUS(bingham_ahrs_smooth(&p, SN, g, acc, mag, q1, s1), BINGHAM_ERR_INVALID_ARGUMENT);
+    check_msg(fn, "sample 0");
+    acc[2] = 9.81;
+    /* a gyroscope row turning more than 1e6 rad late in the recording */
+    g[3 * (SN - 2)] = 1e300;
+    CHECK_STATUS(bingham_ahrs_smooth_ex(&p, SN, t, g, acc, mag, q1, s1, b2, c2), BINGHAM_ERR_INVALID_ARGUMENT);
+    check_msg(fx, "sample");
+    g[3 * (SN - 2)] = 0.001;
+    /* a timestamp not after the previous one */
+    t[SN / 2] = t[SN / 2 - 1];
+    CHECK_STATUS(bingham_ahrs_smooth_ex(&p, SN, t, g, acc, mag, q1, s1, b2, c2), BINGHAM_ERR_INVALID_ARGUMENT);
+    check_msg(fx, "timestamp");
+    t[SN / 2] = 500.0 + 0.01 * (SN / 2);
+    /* a bad parameter */
+    bingham_ahrs_params bad = p;
+    bad.sample_time = NAN;
+    CHECK_STATUS(bingham_ahrs_smooth(&bad, SN, g, acc, mag, q1, s1), BINGHAM_ERR_INVALID_ARGUMENT);
+    /* n * 4 overflowing, the arrays aimed at an inaccessible page: nothing read */
+    CHECK_STATUS(bingham_ahrs_smooth_ex(&p, (size_t)-1 / 4, no_access(), no_access(), no_access(), NULL, no_access(),
+                                        NULL, NULL, NULL),
+                 BINGHAM_ERR_INVALID_DIMENSION);
+    check_msg(fx, NULL);
+    /* n = 0: nothing to do */
+    CHECK_OK(bingham_ahrs_smooth(&p, 0, g, acc, mag, q1, s1));
+    CHECK(untouched(q1, sizeof q1) && untouched(s1, sizeof s1) && untouched(b2, sizeof b2) &&
+          untouched(c2, sizeof c2));
+    /* n = 1: the online AHRS's first estimate */
+    CHECK_OK(bingham_ahrs_smooth(&p, 1, g, acc, mag, q1, NULL));
+    CHECK(memcmp(q1, qo, 4 * sizeof(double)) == 0);
+}
+
 int main(void) {
     if (guard_pages_init()) return 1;
     (void)PI;
@@ -1784,5 +1889,6 @@ int main(void) {
     test_ahrs_update_dt();
     test_ahrs_batch_timed();
     test_ahrs_orientation_covariance();
+    test_ahrs_smooth();
     return check_summary("ahrs_api");
 }

@@ -1154,6 +1154,41 @@ static void test_ahrs() {
     bingham_ahrs_free(c);
 }
 
+// bingham::smooth and bingham::smooth_ex: bit for bit the C calls; a wrong shape and a refused
+// recording throw with the C call's status and message.
+static void test_smooth() {
+    const int n = 250;
+    std::vector<double> gyr(3 * n), acc(3 * n), mag(3 * n), t(n);
+    for (int k = 0; k < n; ++k) {
+        std::array<double, 3> g, ac, mg;
+        ahrs_sample(k, g, ac, mg);
+        for (int i = 0; i < 3; ++i) gyr[3 * k + i] = g[i], acc[3 * k + i] = ac[i], mag[3 * k + i] = mg[i];
+        t[k] = 7.0 + 0.01 * k + (k % 3 == 0 ? 0.002 : 0.0);
+    }
+    const bingham::AhrsParams p = bingham::ahrs_default_params(0.01);
+    const std::vector<double> q = bingham::smooth(p, gyr, acc, mag);
+    std::vector<double> qc(4 * n);
+    CHECK_OK(bingham_ahrs_smooth(&p, n, gyr.data(), acc.data(), mag.data(), qc.data(), nullptr));
+    CHECK(same(q, qc));
+    const std::vector<double> q6 = bingham::smooth(p, gyr, acc);
+    CHECK_OK(bingham_ahrs_smooth(&p, n, gyr.data(), acc.data(), nullptr, qc.data(), nullptr));
+    CHECK(same(q6, qc));
+    const bingham::Smoothed r = bingham::smooth_ex(p, t, gyr, acc, mag);
+    std::vector<double> sc(n), bc(3 * n), cc(9 * n);
+    CHECK_OK(bingham_ahrs_smooth_ex(&p, n, t.data(), gyr.data(), acc.data(), mag.data(), qc.data(), sc.data(),
+                                    bc.data(), cc.data()));
+    CHECK(same(r.quat, qc) && same(r.spread, sc) && same(r.bias, bc) && same(r.covariance, cc));
+    CHECK(bingham::smooth(p, {}, {}).empty());
+    expect_error([&] { (void)bingham::smooth(p, gyr, std::vector<double>(3)); }, BINGHAM_ERR_INVALID_DIMENSION,
+                 "smooth: acc of another length");
+    std::vector<double> bad = acc;
+    bad[2] = std::nan("");
+    bad[0] = bad[1] = 0.0;
+    expect_error([&] { (void)bingham::smooth(p, gyr, bad, mag); }, BINGHAM_ERR_INVALID_ARGUMENT,
+                 [&] { return bingham_ahrs_smooth(&p, n, gyr.data(), bad.data(), mag.data(), qc.data(), nullptr); },
+                 "smooth: a first sample without gravity");
+}
+
 int main() {
     try {
         test_free_functions();
@@ -1163,6 +1198,7 @@ int main() {
         test_spin_filter();
         test_ahrs();
         test_ahrs_timing();
+        test_smooth();
     } catch (const std::exception &e) {
         std::fprintf(stderr, "unexpected exception: %s\n", e.what());
         return 1;

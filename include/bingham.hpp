@@ -1448,6 +1448,72 @@ private:
     bingham_ahrs *a_ = nullptr;
 };
 
+/// What smooth_ex() returns: per sample the smoothed quaternion (n x 4, w, x, y, z), the total
+/// angular spread (n, rad), the smoothed gyroscope bias (n x 3, rad/s) and the orientation
+/// covariance (n x 9, rad², row-major 3 x 3 per sample), all row-major.
+struct Smoothed {
+    std::vector<double> quat, spread, bias, covariance;
+};
+
+/// The offline smoother over a whole recording (bingham_ahrs_smooth()): gyr, acc, mag (empty
+/// for none) n x 3 row-major, row k the sample at k * sample_time (a row holding NaN: no sample
+/// of that sensor). Returns the n x 4 smoothed quaternions (w, x, y, z per row, sensor -> world
+/// ENU). Throws bingham::Error as the C call fails (nothing is returned then).
+inline std::vector<double> smooth(const AhrsParams &params, const std::vector<double> &gyr,
+                                  const std::vector<double> &acc, const std::vector<double> &mag = {}) {
+    const std::size_t n = gyr.size() / 3;
+    detail::require_dim(gyr.size() == 3 * n && acc.size() == 3 * n && (mag.empty() || mag.size() == 3 * n),
+                        "bingham::smooth", "gyr, acc (and mag) must all be n x 3");
+    std::vector<double> q(4 * n);
+    if (n == 0) return q;
+    detail::check(
+        bingham_ahrs_smooth(&params, n, gyr.data(), acc.data(), mag.empty() ? nullptr : mag.data(), q.data(), nullptr));
+    return q;
+}
+
+/// smooth() with every output and optional timestamps `t` (empty: uniformly spaced by
+/// sample_time; else n values, seconds, strictly increasing; bingham_ahrs_smooth_ex()).
+inline Smoothed smooth_ex(const AhrsParams &params, const std::vector<double> &t, const std::vector<double> &gyr,
+                          const std::vector<double> &acc, const std::vector<double> &mag = {}) {
+    const std::size_t n = gyr.size() / 3;
+    detail::require_dim(gyr.size() == 3 * n && acc.size() == 3 * n && (mag.empty() || mag.size() == 3 * n) &&
+                            (t.empty() || t.size() == n),
+                        "bingham::smooth_ex", "gyr, acc (and mag) must all be n x 3, t empty or n");
+    Smoothed r{std::vector<double>(4 * n), std::vector<double>(n), std::vector<double>(3 * n),
+               std::vector<double>(9 * n)};
+    if (n == 0) return r;
+    detail::check(bingham_ahrs_smooth_ex(&params, n, t.empty() ? nullptr : t.data(), gyr.data(), acc.data(),
+                                         mag.empty() ? nullptr : mag.data(), r.quat.data(), r.spread.data(),
+                                         r.bias.data(), r.covariance.data()));
+    return r;
+}
+
+#if BINGHAM_HPP_EIGEN
+/// smooth() on Eigen matrices (gyr, acc, mag: n x 3, any storage order; mag with 0 rows for
+/// none): returns the n x 4 smoothed quaternions (w, x, y, z per row); with `spread` non-null it
+/// receives the n total angular spreads (rad).
+template <class G, class A, class M>
+Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> smooth(const AhrsParams &params,
+                                                                  const Eigen::MatrixBase<G> &gyr,
+                                                                  const Eigen::MatrixBase<A> &acc,
+                                                                  const Eigen::MatrixBase<M> &mag,
+                                                                  Eigen::VectorXd *spread = nullptr) {
+    const Eigen::Index n = gyr.rows();
+    detail::require_dim(gyr.cols() == 3 && acc.cols() == 3 && acc.rows() == n &&
+                            (mag.rows() == 0 || (mag.rows() == n && mag.cols() == 3)),
+                        "bingham::smooth", "gyr, acc (and mag) must all be n x 3");
+    using Rows3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+    const Rows3 g = gyr, a = acc, m = mag;
+    Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor> q(n, 4);
+    if (spread) spread->resize(n);
+    if (n == 0) return q;
+    detail::check(bingham_ahrs_smooth(&params, static_cast<std::size_t>(n), g.data(), a.data(),
+                                      mag.rows() == 0 ? nullptr : m.data(), q.data(),
+                                      spread ? spread->data() : nullptr));
+    return q;
+}
+#endif
+
 }  // inline namespace
 }  // namespace bingham
 

@@ -23,6 +23,7 @@ pub mod normalization;
 pub mod observation;
 pub mod quaternion;
 mod sampler;
+pub mod smoother;
 pub mod special;
 
 pub use distribution::Bingham;

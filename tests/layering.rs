@@ -8,7 +8,7 @@
 //! 3. `distribution`
 //! 4. built on the distribution: `mle`, `sampler`, `deterministic`, `observation`
 //! 5. `filter`
-//! 6. `ahrs`
+//! 6. `ahrs`, and `smoother` on it (the offline smoother runs the AHRS twice)
 //! 7. `ffi` (the C ABI)
 //!
 //! Between the files (the rules of [`file_rules`]): no file takes names from the module file of
@@ -36,6 +36,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("observation", 4),
     ("filter", 5),
     ("ahrs", 6),
+    ("smoother", 6),
     ("ffi", 7),
 ];
 

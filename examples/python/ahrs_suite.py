@@ -10,6 +10,10 @@ Filters (each with its defaults, causal, on the same samples):
 * Bingham: ``bingham.Ahrs(Ts).update_batch(gyr, acc, mag, spread=True)``, then ``gyro_bias()``;
 * VQF: ``broad.run_vqf`` (``vqf.VQF(Ts).updateBatch``, ``quat9D``); its bias estimate (the
   ``bias`` output of ``updateBatch``, rad/s) from a second, identical VQF run;
+* Smoother: ``bingham.smooth(gyr, acc, mag, sample_time=Ts, time=t, full=True)``, the offline
+  smoother over the whole trial (not causal), its spread and its smoothed bias at the last sample;
+* offlineVQF: ``vqf.offlineVQF(gyr, acc, mag, Ts)`` (VQF's offline variant), ``quat9D`` and its
+  ``bias`` output at the last sample; it gets the samples as VQF does;
 * Madgwick: ``broad.run_madgwick`` (``ahrs`` package, gain 0.12, earth frame turned to ENU); it
   has no bias estimate.
 
@@ -123,9 +127,11 @@ sys.path.insert(0, HERE)
 import broad  # noqa: E402  (the BROAD comparison: metric and peer runners)
 import imu_sim  # noqa: E402
 
-FILTERS = ("bingham", "vqf", "madgwick")
-LABELS = {"bingham": "Bingham", "vqf": "VQF", "madgwick": "Madgwick"}
-SHORT = {"bingham": "Bing", "vqf": "VQF", "madgwick": "Madg"}
+FILTERS = ("bingham", "smoother", "vqf", "vqf_offline", "madgwick")
+LABELS = {"bingham": "Bingham", "smoother": "Smoother", "vqf": "VQF",
+          "vqf_offline": "offlineVQF", "madgwick": "Madgwick"}
+SHORT = {"bingham": "Bing", "smoother": "Smth", "vqf": "VQF", "vqf_offline": "oVQF",
+         "madgwick": "Madg"}
 METRICS = ("total", "heading", "inclination")
 SEED = 20
 SETTLE = 10.0
@@ -250,6 +256,17 @@ def run_bingham(trial):
     return np.asarray(q, dtype=float), np.asarray(spread, dtype=float), f.gyro_bias(), seconds
 
 
+def run_smoother(trial):
+    """The offline smoother (``bingham.smooth``, the whole trial): (quaternions n×4, spread n
+    (rad), the smoothed bias at the last sample (3, rad/s), seconds)."""
+    import bingham
+    t0 = time.perf_counter()
+    r = bingham.smooth(trial["gyr"], trial["acc"], trial["mag"], sample_time=trial["Ts"],
+                       time=trial.get("time"), full=True)
+    seconds = time.perf_counter() - t0
+    return np.asarray(r.quat, dtype=float), np.asarray(r.spread, dtype=float), r.bias[-1], seconds
+
+
 def vqf_bias(trial):
     """VQF's gyro bias estimate after the last sample (rad/s): ``broad.run_vqf`` returns only the
     quaternions, so this is a second run of the same filter on the same samples."""
@@ -295,8 +312,21 @@ def run_filter(name, trial):
     """(q, spread or None, bias estimate or None, seconds)."""
     if name == "bingham":
         return run_bingham(trial)
+    if name == "smoother":
+        return run_smoother(trial)
     trial = peer_trial(trial)
     timed = trial.get("time") is not None
+    if name == "vqf_offline":
+        import vqf
+        if timed:
+            dt = np.diff(trial["time"], prepend=trial["time"][0] - trial["Ts"])
+            gyr = trial["gyr"] * (dt / trial["Ts"])[:, None]
+            trial = dict(trial, gyr=np.ascontiguousarray(gyr))
+        t0 = time.perf_counter()
+        out = vqf.offlineVQF(trial["gyr"], trial["acc"], trial["mag"], trial["Ts"])
+        seconds = time.perf_counter() - t0
+        return (np.asarray(out["quat9D"], dtype=float), None,
+                np.asarray(out["bias"][-1], dtype=float), seconds)
     if name == "vqf":
         if timed:
             dt = np.diff(trial["time"], prepend=trial["time"][0] - trial["Ts"])
@@ -428,7 +458,8 @@ def evaluate(name, desc, overrides, settle, filters, seed, quick):
             r["segment_rms_error_deg"] = se.tolist()
             r["segment_rms_spread_deg"] = ss.tolist()
             r["segment_spearman"] = spearman(se, ss)
-            segs = (se, ss)
+            if f == "bingham":
+                segs = (se, ss)
         res["filters"][f] = r
     if not res["errors"]:
         del res["errors"]
@@ -446,7 +477,7 @@ def fmt(v, spec="{:6.2f}", width=6):
 def print_table(results, filters):
     groups = [("total", "total RMSE (deg)"), ("heading", "heading RMSE"),
               ("inclination", "inclination RMSE")]
-    bias_f = [f for f in filters if f in ("bingham", "vqf")]
+    bias_f = [f for f in filters if f in ("bingham", "smoother", "vqf", "vqf_offline")]
     w = 6 * len(filters) + len(filters) - 1
     head1 = f"{'':<18}" + "".join(f" | {title:^{w}}" for _, title in groups)
     head2 = f"{'scenario':<18}" + "".join(" | " + " ".join(f"{SHORT[f]:>6}" for f in filters)
@@ -455,8 +486,9 @@ def print_table(results, filters):
         wb = 6 * len(bias_f) + len(bias_f) - 1
         head1 += f" | {'bias err %':^{wb}}"
         head2 += " | " + " ".join(f"{SHORT[f]:>6}" for f in bias_f)
-    if "bingham" in filters:
-        head1 += " | Bing"
+    ours = [f for f in ("bingham", "smoother") if f in filters]
+    for f in ours:
+        head1 += f" | {SHORT[f]:>5}"
         head2 += " | e/spr"
     print(head1)
     print(head2)
@@ -473,8 +505,8 @@ def print_table(results, filters):
         if bias_f:
             line += " | " + " ".join(fmt(fr.get(f, {}).get("bias_error_pct"), "{:6.1f}")
                                      for f in bias_f)
-        if "bingham" in filters:
-            line += " | " + fmt(fr.get("bingham", {}).get("error_spread_ratio"), "{:5.2f}", 5)
+        for f in ours:
+            line += " | " + fmt(fr.get(f, {}).get("error_spread_ratio"), "{:5.2f}", 5)
         print(line)
     print()
 

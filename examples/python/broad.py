@@ -13,8 +13,8 @@ README.md in the data directory). DATA_DIR defaults to $BROAD_DIR, else ``../sha
 relative to the repository root.
 
 Each trial ``NN_name.npz`` holds gyr (rad/s), acc (m/s²), mag (µT), opt_quat (truth, (w, x, y, z),
-sensor -> ENU) and movement. Every filter runs causally over the whole trial with one parameter
-set for all trials:
+sensor -> ENU) and movement. Every filter runs over the whole trial with one parameter set for all
+trials, causally except the two offline ones (Smoother, offlineVQF):
 
 * Bingham: ``bingham.Ahrs(Ts).update_batch(gyr, acc, mag, spread=True)`` with its default
   (tuned) parameters; also gives the predicted total angular standard deviation ("spread") and,
@@ -23,7 +23,11 @@ set for all trials:
   the AHRS's online estimate of the latency); ``--mag-latency estimate`` runs each trial
   twice and sets it to the first run's final estimate (a per-trial calibration from the whole
   trial, not causal; the time is that of the second run);
+* Smoother: ``bingham.smooth(gyr, acc, mag, sample_time=Ts)``, the offline smoother (the whole
+  trial, forward and backward; not causal) with the same defaults, and its predicted spread;
 * VQF: ``vqf.VQF(Ts)`` default parameters, online 9-D output ``quat9D`` (C++ batch call);
+* offlineVQF: ``vqf.offlineVQF(gyr, acc, mag, Ts)`` default parameters, 9-D output ``quat9D``
+  (VQF's own offline variant: forward–backward filtering of its bias and low-pass states);
 * Madgwick: ``ahrs.filters.Madgwick(gyr, acc, mag, frequency, gain=0.12)`` (the class's own batch
   loop and initial quaternion), earth frame turned to ENU by ``(1/√2, 0, 0, 1/√2) ⊗ q``;
 * Mahony: ``ahrs.filters.Mahony(..., k_P=0.74, k_I=0.0012)`` (already ENU).
@@ -58,9 +62,12 @@ REPO = os.path.dirname(os.path.dirname(HERE))
 
 ATTRIBUTION = ("BROAD (Laidig, Caruso, Cereatti, Seel, Data 6(7):72, 2021, "
                "doi:10.3390/data6070072), CC BY 4.0")
-FILTERS = ("bingham", "vqf", "madgwick", "mahony")
-LABELS = {"bingham": "Bingham", "vqf": "VQF", "madgwick": "Madgwick", "mahony": "Mahony"}
-COLORS = {"bingham": "#d62728", "vqf": "#1f77b4", "madgwick": "#2ca02c", "mahony": "#9467bd"}
+FILTERS = ("bingham", "smoother", "vqf", "vqf_offline", "madgwick", "mahony")
+OURS = ("bingham", "smoother")
+LABELS = {"bingham": "Bingham", "smoother": "Smoother", "vqf": "VQF", "vqf_offline": "offlineVQF",
+          "madgwick": "Madgwick", "mahony": "Mahony"}
+COLORS = {"bingham": "#d62728", "smoother": "#ff7f0e", "vqf": "#1f77b4", "vqf_offline": "#17becf",
+          "madgwick": "#2ca02c", "mahony": "#9467bd"}
 METRICS = ("total", "heading", "inclination")
 NED_TO_ENU = np.array([math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)])
 
@@ -135,6 +142,22 @@ def run_ours(trial):
     return run_bingham(trial)[:3]
 
 
+def run_smoother(trial):
+    """The Bingham offline smoother with its defaults on one trial: (quaternions N×4, predicted
+    spread N in rad, seconds)."""
+    import bingham
+    t0 = time.perf_counter()
+    q, spread = bingham.smooth(trial["gyr"], trial["acc"], trial["mag"], sample_time=trial["Ts"])
+    return q, spread, time.perf_counter() - t0
+
+
+def run_vqf_offline(trial):
+    import vqf
+    t0 = time.perf_counter()
+    out = vqf.offlineVQF(trial["gyr"], trial["acc"], trial["mag"], trial["Ts"])
+    return out["quat9D"], None, time.perf_counter() - t0
+
+
 def run_vqf(trial):
     import vqf
     t0 = time.perf_counter()
@@ -159,7 +182,8 @@ def run_mahony(trial):
     return q, None, time.perf_counter() - t0
 
 
-RUNNERS = {"bingham": run_ours, "vqf": run_vqf, "madgwick": run_madgwick, "mahony": run_mahony}
+RUNNERS = {"bingham": run_ours, "smoother": run_smoother, "vqf": run_vqf,
+           "vqf_offline": run_vqf_offline, "madgwick": run_madgwick, "mahony": run_mahony}
 
 
 def available_filters(no_peers):
@@ -167,14 +191,20 @@ def available_filters(no_peers):
     run, skipped = [], {}
     b = _bingham()
     if isinstance(b, str):
-        skipped["bingham"] = b
+        skipped["bingham"] = skipped["smoother"] = b
     else:
         run.append("bingham")
+        if hasattr(b, "smooth"):
+            run.append("smoother")
+        else:
+            skipped["smoother"] = "the installed bingham package has no smooth yet"
     if no_peers:
-        for f in FILTERS[1:]:
-            skipped[f] = "--no-peers"
+        for f in FILTERS:
+            if f not in OURS:
+                skipped[f] = "--no-peers"
         return run, skipped
-    for f, module in (("vqf", "vqf"), ("madgwick", "ahrs"), ("mahony", "ahrs")):
+    for f, module in (("vqf", "vqf"), ("vqf_offline", "vqf"), ("madgwick", "ahrs"),
+                      ("mahony", "ahrs")):
         try:
             __import__(module)
             run.append(f)
@@ -319,10 +349,12 @@ def group_means(trials, filters):
     return out
 
 
-def print_table(title, rows, filters, metric, extra=None, fmt="{:8.2f}"):
-    head = f"{title:<42}" + "".join(f"{LABELS[f]:>10}" for f in filters)
-    if extra:
-        head += f"{extra[0]:>12}"
+def print_table(title, rows, filters, metric, extra=(), fmt="{:8.2f}"):
+    """``extra``: further columns, each (heading, filter, key)."""
+    extra = [extra] if extra and isinstance(extra[0], str) else list(extra or ())
+    head = f"{title:<42}" + "".join(f"{LABELS[f]:>12}" for f in filters)
+    for e in extra:
+        head += f"{e[0]:>14}"
     print(head)
     print("-" * len(head))
     for name, fdict in rows:
@@ -332,10 +364,10 @@ def print_table(title, rows, filters, metric, extra=None, fmt="{:8.2f}"):
         line = f"{name[:42]:<42}"
         for f in filters:
             v = fdict.get(f, {}).get(metric)
-            line += f"{'':>2}" + (fmt.format(v) if v is not None else f"{'--':>8}")
-        if extra:
-            v = fdict.get(extra[1], {}).get(extra[2])
             line += f"{'':>4}" + (fmt.format(v) if v is not None else f"{'--':>8}")
+        for e in extra:
+            v = fdict.get(e[1], {}).get(e[2])
+            line += f"{'':>6}" + (fmt.format(v) if v is not None else f"{'--':>8}")
         print(line)
     print()
 
@@ -418,13 +450,13 @@ def main(argv=None):
 
     glabel = lambda g: f"mean {g.replace('_', ' ')} ({len(groups[g]['trials'])})"  # noqa: E731
     for metric in METRICS:
-        extra = ("Bingham cal", "bingham", "calibration_ratio") \
-            if metric == "total" and "bingham" in filters else None
+        extra = [(f"{LABELS[f]} cal", f, "calibration_ratio") for f in OURS
+                 if metric == "total" and f in filters]
         print_table(f"{metric} RMSE (deg)", rows(glabel), filters, metric, extra)
     print_table("time (us per sample)", rows(glabel), filters, "us_per_sample")
     if "bingham" in filters:
-        print("Bingham cal: RMS of the actual total error / RMS of the predicted spread "
-              "(1 = calibrated, > 1 = overconfident)")
+        print("Bingham cal, Smoother cal: RMS of the actual total error / RMS of the predicted "
+              "spread (1 = calibrated, > 1 = overconfident)")
         setting = args.mag_latency or "default (-1: the online estimate compensated)"
         print(f"Bingham mag_latency: {setting}; its online estimate of the magnetometer "
               "latency after the last sample (ms):")

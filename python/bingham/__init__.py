@@ -35,7 +35,8 @@ holds :class:`Status`, :class:`BinghamError` and the messages, ``_arrays`` conve
 :mod:`bingham.distribution` has the functions of ``(m, z)``, :mod:`bingham.filter` the
 :class:`Filter` (``_callback`` runs its Python callables), :mod:`bingham.spin` the
 :class:`SpinFilter` (Glover & Kaelbling's orientation-and-spin filter), :mod:`bingham.ahrs` the
-:class:`Ahrs`, :mod:`bingham.quaternion` the quaternion helpers (NumPy only, no library call).
+:class:`Ahrs`, :mod:`bingham.smooth` the offline smoother :func:`smooth` (and ``python -m bingham
+smooth``, :mod:`bingham.__main__`), :mod:`bingham.quaternion` the quaternion helpers (NumPy only, no library call).
 """
 
 from __future__ import annotations
@@ -79,6 +80,7 @@ from .distribution import (
 )
 from .filter import PREDICT_TOLERANCE, UPDATE_TOLERANCE, Filter, NonlinearReport
 from .spin import SpinFilter
+from .smooth import Smoothed, smooth
 from .quaternion import (
     OrientationError,
     from_scipy,
@@ -131,6 +133,8 @@ __all__ = [
     "angular_spread",
     "AhrsParams",
     "Ahrs",
+    "smooth",
+    "Smoothed",
     "quat_multiply",
     "quat_conjugate",
     "OrientationError",

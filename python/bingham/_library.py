@@ -116,6 +116,8 @@ _SIGNATURES = {
     "bingham_ahrs_update_batch_health": (_STATUS, [ctypes.c_void_p, _SIZE, _D, _D, _D, _D, _D, _D]),
     "bingham_ahrs_update_batch_timed": (_STATUS, [ctypes.c_void_p, _SIZE, _D, _D, _D, _D, _D, _D, _D]),
     "bingham_ahrs_health": (_STATUS, [ctypes.c_void_p, ctypes.c_void_p]),
+    "bingham_ahrs_smooth": (_STATUS, [ctypes.c_void_p, _SIZE, _D, _D, _D, _D, _D]),
+    "bingham_ahrs_smooth_ex": (_STATUS, [ctypes.c_void_p, _SIZE, _D, _D, _D, _D, _D, _D, _D, _D]),
     "bingham_ahrs_quaternion": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_state": (_STATUS, [ctypes.c_void_p, _D, _D]),
     "bingham_ahrs_set_state": (_STATUS, [ctypes.c_void_p, _D, _D]),

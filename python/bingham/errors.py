@@ -82,6 +82,7 @@ _PYTHON_NAMES: Dict[str, str] = {
     "bingham_ahrs_update": "Ahrs.update",
     "bingham_ahrs_update_dt": "Ahrs.update",
     "bingham_ahrs_update_batch_timed": "Ahrs.update_batch",
+    "bingham_ahrs_smooth_ex": "smooth",
     "bingham_ahrs_update_batch": "Ahrs.update_batch",
     "bingham_ahrs_update_batch_spread": "Ahrs.update_batch",
     "bingham_ahrs_update_batch_health": "Ahrs.update_batch",

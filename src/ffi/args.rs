@@ -150,6 +150,7 @@ arg_tuple!(A, B, C, D);
 arg_tuple!(A, B, C, D, E);
 arg_tuple!(A, B, C, D, E, F);
 arg_tuple!(A, B, C, D, E, F, G);
+arg_tuple!(A, B, C, D, E, F, G, H);
 
 /// An optional argument (`opt`, `if cond`): `None` is neither checked nor read.
 pub(crate) struct Opt<A>(Option<A>);

@@ -19,6 +19,7 @@
 //! - [`world`]: the filter's world-frame steps (`bingham_filter_predict_world`, …; Glover &
 //!   Kaelbling's first-order model).
 //! - [`ahrs`]: the IMU orientation filter handle `bingham_ahrs`.
+//! - [`smooth`]: the offline smoother over a whole recording (`bingham_ahrs_smooth`).
 //! - [`spin`]: the second-order (orientation and spin) filter handle `bingham_spin_filter`.
 //!
 //! Conventions (see the header's preamble): row-major `double` arrays, `z` in any order and
@@ -62,6 +63,8 @@ pub mod nonlinear;
 
 pub mod ahrs;
 
+pub mod smooth;
+
 pub mod spin;
 
 pub use ahrs::*;
@@ -73,6 +76,7 @@ pub use mle::*;
 pub use nonlinear::*;
 pub use normalization::*;
 pub use observation::*;
+pub use smooth::*;
 pub use spin::*;
 pub use status::{bingham_status, bingham_status_str};
 pub use version::*;

@@ -27,8 +27,9 @@
 //! functions), [`case`] (one case: arguments, call, checks), [`invariants`] (per function),
 //! [`drivers`] (case counts, seeds, the loops and the tests of the stateless functions), then
 //! the stateful and special harnesses [`filter`] (the world-frame steps included), [`spin`],
-//! [`vectors`], [`ahrs_inputs`] and [`ahrs`], [`samples`], [`nonlinear`], [`defaults`] (the
-//! functions that fill a struct with defaults), [`helpers`]; [`status`] reads statuses and the
+//! [`vectors`], [`ahrs_inputs`] and [`ahrs`], [`smooth`] (the offline smoother), [`samples`],
+//! [`nonlinear`], [`defaults`] (the functions that fill a struct with defaults), [`helpers`];
+//! [`status`] reads statuses and the
 //! last error message. `tests/api_mirrors.rs` fails if an export is called nowhere here.
 //! The generic generators, buffers and the crash reporter are in `testkit::fuzz`.
 
@@ -48,6 +49,7 @@ mod invariants;
 mod kinds;
 mod nonlinear;
 mod samples;
+mod smooth;
 mod spin;
 mod status;
 mod vectors;
