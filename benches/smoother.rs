@@ -12,7 +12,7 @@ mod imu_stream;
 
 fn bench_smoother(c: &mut Criterion) {
     let mut g = c.benchmark_group("smoother");
-    for (name, dt) in [("286hz", 1.0 / 285.714), ("100hz", 0.01)] {
+    for (name, dt) in [("286hz", 1.0f64 / 285.714), ("100hz", 0.01)] {
         let n = (10.0 / dt).round() as usize;
         let data = imu_stream::stream(dt, n);
         let gyr: Vec<[f64; 3]> = data.iter().map(|s| s[0]).collect();

@@ -593,6 +593,41 @@ static void test_spin_filter() {
     CHECK(spread.spin[3] > noise_spread && spread.spin[3] < 2 * noise_spread);
 }
 
+// bingham::smooth on Eigen matrices (column-major n x 3 in, n x 4 out, the spreads): equal to the
+// std::vector overload and the C call; a wrong shape throws.
+static void test_smooth() {
+    const int n = 200;
+    Eigen::MatrixXd gm(n, 3), am(n, 3), mm(n, 3);
+    std::vector<double> gv, av, mv;
+    for (int k = 0; k < n; ++k) {
+        const double yaw = 0.003 * k;
+        gm.row(k) << 0.001, -0.002, 0.3;
+        am.row(k) << 0.0, 0.0, 9.81;
+        mm.row(k) << 20.0 * std::sin(yaw), 20.0 * std::cos(yaw), -40.0;
+        for (int c = 0; c < 3; ++c) gv.push_back(gm(k, c)), av.push_back(am(k, c)), mv.push_back(mm(k, c));
+    }
+    const bingham::AhrsParams p = bingham::ahrs_default_params(0.01);
+    Eigen::VectorXd spread;
+    const auto qe = bingham::smooth(p, gm, am, mm, &spread);
+    const std::vector<double> qv = bingham::smooth(p, gv, av, mv);
+    std::vector<double> qc(4 * n), sc(n);
+    CHECK_OK(bingham_ahrs_smooth(&p, n, gv.data(), av.data(), mv.data(), qc.data(), sc.data()));
+    CHECK(qe.rows() == n && qe.cols() == 4 && spread.size() == n);
+    bool same = true;
+    for (int k = 0; k < n; ++k) {
+        for (int c = 0; c < 4; ++c) same = same && qe(k, c) == qv[4 * k + c] && qe(k, c) == qc[4 * k + c];
+        same = same && spread(k) == sc[k];
+    }
+    CHECK(same);
+    bool threw = false;
+    try {
+        (void)bingham::smooth(p, gm, Eigen::MatrixXd(n - 1, 3), mm);
+    } catch (const bingham::Error &e) {
+        threw = e.status() == BINGHAM_ERR_INVALID_DIMENSION;
+    }
+    CHECK(threw);
+}
+
 int main() {
     try {
         test_quaternions();
@@ -601,6 +636,7 @@ int main() {
         test_ahrs();
         test_world_steps();
         test_spin_filter();
+        test_smooth();
     } catch (const std::exception &e) {
         std::fprintf(stderr, "unexpected exception: %s\n", e.what());
         return 1;

@@ -10,6 +10,8 @@
 //! pass turns by `gyr[k]` between samples `k−1` and `k`), its time step `t[k+1] − t[k]`, its
 //! gyroscope bias the negative of the forward's. It starts as the online AHRS does, from its
 //! first sample (the recording's last), whose evidence no forward posterior before it holds;
+//! its magnetic reference (the field's norm and dip, against which it tests for disturbances)
+//! is the forward pass's final one, not its first sample's, which may lie in a disturbance;
 //! at sample `k` the smoother takes its *predicted* state: the state after sample `k+1` turned
 //! by the gyroscope to sample `k`, before sample `k`'s accelerometer and magnetometer, which
 //! the forward posterior holds already. Its gyroscope has the forward pass's final bias
@@ -104,6 +106,10 @@ pub struct SmoothOptions {
     /// Whether the backward pass starts from a uniform orientation (true) or, as the online
     /// AHRS does, from its first sample's accelerometer and magnetometer (false, the default).
     pub uniform_start: bool,
+    /// Whether the backward pass takes the forward pass's final magnetic reference (the field's
+    /// norm and dip its disturbance test compares with) instead of its first sample's (default
+    /// true).
+    pub forward_mag_reference: bool,
     /// Whether the backward pass's gyroscope has the forward pass's final bias estimate taken
     /// out (default true).
     pub bias_start: bool,
@@ -134,6 +140,7 @@ impl Default for SmoothOptions {
             bias: BiasMode::Fused,
             fusion: Fusion::Tangent,
             uniform_start: false,
+            forward_mag_reference: true,
             bias_start: true,
             gate: DEFAULT_GATE,
         }
@@ -534,6 +541,14 @@ fn run(
         }
         back.update_dt(dt, &g, &acc, mag.as_ref())
             .map_err(|e| prefix(e, &format!("backward pass, sample {k}")))?;
+        if !started && options.forward_mag_reference {
+            // the field's reference (norm and dip, what the disturbance test compares with)
+            // from the forward pass over the whole recording, not from the last sample, which
+            // may lie in a disturbance (a magnet attached for the rest of the recording)
+            if let Some(r) = ahrs.mag_reference() {
+                back.set_mag_reference(r);
+            }
+        }
         started = true;
     }
     Ok(())

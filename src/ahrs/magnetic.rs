@@ -103,6 +103,18 @@ impl Magnetic {
         self.reference.map(|(_, dip)| dip)
     }
 
+    /// The reference norm and dip, if there is one.
+    pub(super) fn reference(&self) -> Option<(f64, f64)> {
+        self.reference
+    }
+
+    /// Replaces the reference norm and dip (the next sample's test compares against it).
+    pub(super) fn set_reference(&mut self, r: (f64, f64)) {
+        self.reference = Some(r);
+        self.cand = r;
+        self.cand_time = 0.0;
+    }
+
     /// Sets the reference from a field sample `m` seen with the body-frame "up" `up_b`.
     pub(super) fn start(&mut self, m: &[f64; 3], up_b: &[f64; 3]) {
         let (norm, dip) = norm_dip(m, up_b);

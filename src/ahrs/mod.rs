@@ -352,6 +352,17 @@ impl Ahrs {
         )
     }
 
+    /// The magnetic reference (the field's norm and dip, rad), if there is one. Crate-internal:
+    /// the offline smoother (`crate::smoother`) hands the forward pass's to its backward pass.
+    pub(crate) fn mag_reference(&self) -> Option<(f64, f64)> {
+        self.sample_state.mag.reference()
+    }
+
+    /// Replaces the magnetic reference (norm, dip) (see [`Ahrs::mag_reference`]).
+    pub(crate) fn set_mag_reference(&mut self, r: (f64, f64)) {
+        self.sample_state.mag.set_reference(r);
+    }
+
     /// The gyroscope bias estimate (rad/s, sensor frame).
     pub fn gyro_bias(&self) -> [f64; 3] {
         let b = &self.sample_state.bias.b;
