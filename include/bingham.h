@@ -2089,7 +2089,10 @@ enum bingham_status bingham_ahrs_orientation_covariance(const struct bingham_ahr
  * is. Range: 0 to 40 ms or 32 samples, whichever is smaller (at least 2 samples). Time
  * convention: gyroscope sample k is the rate over the interval (t_{k-1}, t_k], as in the
  * prediction (for a gyroscope that samples the rate at t_k the estimate is the latency plus
- * half a sample, which is what the compensation needs).
+ * half a sample, which is what the compensation needs). The value is shrunk towards 0 by the
+ * estimate's own standard error (from two halves of the data): L * max(0, 1 - s^2/L^2), so
+ * that a latency the data cannot tell from none reads 0; this is also the value the default
+ * (`mag_latency` = `BINGHAM_AHRS_LATENCY_ESTIMATE`) compensates.
  *
  * Available once 5 s of informative motion have been seen: seconds of samples with the
  * magnetometer present and undisturbed, weighted by g^2/(g^2 + 1), g the change of the

@@ -208,6 +208,39 @@ fn no_estimate_without_a_changing_rate() {
     assert_eq!(b.mag_latency_estimate(), None);
 }
 
+/// A steady spin with small changes of the rate gives the pairs little weight, and the
+/// magnetometer's noise (here twice the suite's) scatters the estimate by milliseconds; what is
+/// compensated is shrunk by that scatter (module `latency`, "the estimate's uncertainty"). On
+/// eight streams without latency the unshrunk estimate (the vertex alone) read 2.3–5.0 ms on
+/// four seeds and 0 on the others (RMS 2.5 ms); shrunk, 4.5 ms on one and 0 on the rest (RMS
+/// 1.6 ms). A latency measured well keeps its value.
+#[test]
+fn a_scattered_estimate_is_shrunk_towards_none() {
+    let mut estimates = Vec::new();
+    for seed in 1..=8 {
+        let mut c = Spin::new(100.0, 0.3, 0);
+        c.spin = 3.0;
+        c.noise = 2.0;
+        c.seed = seed;
+        let s = simulate(&c);
+        let mut a = Ahrs::new(&AhrsParams::new(s.dt)).unwrap();
+        for k in 0..s.gyr.len() {
+            a.update(&s.gyr[k], &s.acc[k], Some(&s.mag[k])).unwrap();
+        }
+        let e = a.mag_latency_estimate().unwrap_or(0.0);
+        println!("seed {seed}: {:.2} ms", e * 1e3);
+        estimates.push(e);
+    }
+    let rms = (estimates.iter().map(|e| e * e).sum::<f64>() / 8.0).sqrt();
+    let above = estimates.iter().filter(|&&e| e > 1e-3).count();
+    assert!(rms < 2.0e-3 && above <= 2, "RMS {rms}, {above} above 1 ms");
+    // a latency of 2 samples with changes of the rate (the test above): kept within 1 ms
+    let s = simulate(&Spin::new(100.0, 1.5, 2));
+    let (a, _, _) = run(&s, &AhrsParams::new(s.dt));
+    let e = a.mag_latency_estimate().unwrap();
+    assert!((e - 0.02).abs() < 1e-3, "{e}");
+}
+
 #[test]
 fn compensating_the_magnetometer_latency_restores_the_heading() {
     // A constant spin at 4 rad/s with the magnetometer 2 samples (20 ms) late: the lag turns

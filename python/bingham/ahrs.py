@@ -380,7 +380,9 @@ class Ahrs(_Handle):
         """The online estimate of the magnetometer's latency behind the gyroscope (seconds,
         0 to 40 ms or 32 samples, whichever is smaller), from the IMU alone; ``None`` until
         5 s of informative motion (a changing rotation rate with an undisturbed magnetometer)
-        have been seen. A readout: pass it as ``mag_latency`` to compensate the latency."""
+        have been seen. Shrunk towards 0 by its own standard error (a latency the data cannot
+        tell from none reads 0). A readout: pass it as ``mag_latency`` to compensate the
+        latency (the default compensates this value)."""
         out = np.empty(1)
         st = lib().bingham_ahrs_mag_latency_estimate(self._h(), _ptr(out))
         if st == Status.ERR_NOT_CONVERGED:

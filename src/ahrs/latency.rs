@@ -23,8 +23,8 @@
 //! needs.)
 //!
 //! Choices (see docs/accuracy.md for the measurements behind them):
-//! - lags `0 … W` and the span `s = W`, `W` = 40 ms in samples (rounded up), at least 2 and at
-//!   most 32: a single consecutive difference (`s = 1`) amplifies the magnetometer's noise by
+//! - lags `0 … W` and the span `s = W`, `W` = 40 ms in samples (rounded up to an even number,
+//!   see the estimate's uncertainty below), at least 2 and at most 32: a single consecutive difference (`s = 1`) amplifies the magnetometer's noise by
 //!   `1/dt` and its product with the gyroscope's noise does not average out across lags; a
 //!   40 ms span cut the scatter of the estimate 6× (100 Hz) to 18× (286 Hz) on the simulated
 //!   IMU;
@@ -35,7 +35,24 @@
 //!   memory is [`MEMORY`] seconds of informative motion, not of time;
 //! - the estimate exists once [`MIN_EVIDENCE`] weighted seconds have been seen and the
 //!   parabola is convex; only pairs whose samples both passed the AHRS's magnetic disturbance
-//!   test are used (the relation needs a homogeneous field).
+//!   test are used (the relation needs a homogeneous field);
+//! - the estimate's uncertainty, and what is compensated: consecutive pairs go alternately into
+//!   two halves of the sums (each forgetting twice as fast, so that their mean remembers what
+//!   one sum did). The span `W` is even, so a magnetometer sample's two pairs (`k` and `k + W`)
+//!   are in the same half and the halves share none of the magnetometer's noise, which is what
+//!   scatters the estimate (without it the scatter on the simulated IMU is 0.1 ms or less,
+//!   with or without the gyroscope's); the squared difference of their vertices,
+//!   `(L_A − L_B)²`, taken every [`BLOCK_TIME`] and averaged over [`MEMORY`] seconds, is then
+//!   four times the variance `σ²` of the estimate `L` (the vertex of their mean; on the
+//!   simulated `spin4_latency10` over six seeds it reads 0.4–1.1 ms where the estimates scatter
+//!   by about 0.4 ms: on the safe side). What is compensated (and reported) is
+//!   `L·max(0, 1 − σ²/L²)`: `E[L²] = L_true² + σ²`, so `L² − σ²` estimates `L_true²` without
+//!   bias, and the shrinkage `L_true²/(L_true² + σ²)` that minimizes the compensation's mean
+//!   square error becomes `1 − σ²/L²` (none when the scatter explains the whole estimate).
+//!   Without it a steady spin, whose pairs carry little weight, compensated the scatter of an
+//!   estimate that reads ±1–2 ms on a stream without latency (the simulated
+//!   `reject180_nomag`; docs/accuracy/ahrs.md); a latency measured well (BROAD's 12 ms) is not
+//!   changed by it.
 
 use super::vec3::{cross3, dot3, scale3};
 use crate::quaternion::q4;
@@ -48,6 +65,9 @@ const MAX_WINDOW: usize = 32;
 const RING: usize = MAX_WINDOW + 1;
 /// Memory of the forgotten sums, in seconds of informative motion (weight 1).
 const MEMORY: f64 = 30.0;
+/// How often (s) the halves' vertices update the estimate's scatter (module documentation,
+/// "the estimate's uncertainty").
+const BLOCK_TIME: f64 = 1.0;
 /// The weighted seconds of motion needed before there is an estimate.
 const MIN_EVIDENCE: f64 = 5.0;
 /// The rate change (rad/s²) across the lag window at which a pair has half weight.
@@ -89,9 +109,16 @@ pub(super) struct LatencyEstimator {
     pushed: usize,
     /// The forgotten weighted means of `|r_j|²/|m̄|²` ((rad/s)²) by slot offset: `sums[u]` is
     /// `S_j` of the lag `j = W − u`, so that slots `head + 1 …` and `sums[0 …]` both ascend.
-    sums: [f64; RING],
+    sums: [[f64; RING]; 2],
     /// Weighted seconds of motion seen (`Σ w·dt`).
     evidence: f64,
+    /// Samples pushed since the scatter's last update, and the half the current sample's pair
+    /// goes to.
+    block_samples: usize,
+    half: usize,
+    /// The mean of `(L_A − L_B)²` (s²) over the blocks, and the blocks averaged so far.
+    scatter: f64,
+    blocks: f64,
 }
 
 impl LatencyEstimator {
@@ -100,6 +127,8 @@ impl LatencyEstimator {
         let window = ((WINDOW_TIME / dt) - 1e-9)
             .ceil()
             .clamp(2.0, MAX_WINDOW as f64) as usize;
+        // even (MAX_WINDOW is): the halves then share no magnetometer sample
+        let window = window + window % 2;
         LatencyEstimator {
             window,
             dt,
@@ -111,14 +140,25 @@ impl LatencyEstimator {
             ring_rate: [[0.0; RING]; 3],
             head: 0,
             pushed: 0,
-            sums: [0.0; RING],
+            sums: [[0.0; RING]; 2],
             evidence: 0.0,
+            block_samples: 0,
+            half: 0,
+            scatter: 0.0,
+            blocks: 0.0,
         }
     }
 
     /// One sample: `dq` the bias-corrected gyroscope increment the prediction used, `mag` the
     /// raw magnetometer sample if it passed the disturbance test.
     pub(super) fn push(&mut self, dq: &[f64; 4], mag: Option<&[f64; 3]>) {
+        self.block_samples += 1;
+        // consecutive pairs alternate between the halves: with an even span, the two pairs a
+        // magnetometer sample is in (k and k + W) fall into the same half
+        self.half = 1 - self.half;
+        if self.block_samples as f64 * self.dt >= BLOCK_TIME {
+            self.end_block();
+        }
         let len = self.window + 1;
         let o = q4::mul(&self.orient, dq);
         // back to unit length (one Newton step for 1/|o|: the increments are unit to rounding,
@@ -203,10 +243,11 @@ impl LatencyEstimator {
         if !(w.is_finite() && w > 0.0) {
             return;
         }
-        let a = self.forget * w;
+        // each half forgets twice as fast: it receives half of the pairs
+        let a = 2.0 * self.forget * w;
         // slots head + 1 … len − 1 are the lags W … head + 1 (sums[0 …]), slots 0 … head the
         // lags head … 0 (the rest of sums)
-        let (lower, upper) = self.sums[..len].split_at_mut(len - 1 - head);
+        let (lower, upper) = self.sums[self.half][..len].split_at_mut(len - 1 - head);
         let r =
             |range: std::ops::Range<usize>| (&rx[range.clone()], &ry[range.clone()], &rz[range]);
         accumulate_lags(lower, r(head + 1..len), &d, &mb, inv_n2, a);
@@ -214,14 +255,35 @@ impl LatencyEstimator {
         self.evidence += w * self.dt;
     }
 
-    /// The latency estimate (s, within 0 … `W·dt`), once [`MIN_EVIDENCE`] weighted seconds have
-    /// been seen and the sums single out a lag (a convex parabola at the smallest).
-    pub(super) fn estimate(&self) -> Option<f64> {
+    /// Every [`BLOCK_TIME`]: the halves' vertices update the scatter. Each half's vertex is
+    /// taken at the mean's parabola, linearized (`i + ½ (s_h(i−1) − s_h(i+1))/den`, with the
+    /// mean's lag `i` and curvature `den`), so that the difference of the halves is the noise of
+    /// the mean's vertex and not the jumps of a noisier half's own smallest lag.
+    fn end_block(&mut self) {
+        self.block_samples = 0;
         if self.evidence < MIN_EVIDENCE {
-            return None;
+            return;
         }
         let w = self.window;
-        let s = |j: usize| self.sums[w - j]; // S_j
+        let Some((_, i, den)) = self.fit(|j| 0.5 * (self.sums[0][w - j] + self.sums[1][w - j]))
+        else {
+            return;
+        };
+        let slope = |h: usize| self.sums[h][w - (i - 1)] - self.sums[h][w - (i + 1)];
+        let d = 0.5 * (slope(0) - slope(1)) / den * self.dt;
+        if d.is_finite() {
+            self.blocks += 1.0;
+            // a running mean until MEMORY seconds of blocks, then exponential forgetting
+            let alpha = (1.0 / self.blocks).max(BLOCK_TIME / MEMORY);
+            self.scatter += alpha * (d * d - self.scatter);
+        }
+    }
+
+    /// The parabola through the smallest of the sums `s(j)` (lag `j`) and its neighbours: its
+    /// vertex (s), not clamped (it may lie up to a lag beyond `0 … W·dt`), the middle lag `i`
+    /// and the second difference `den`; `None` if it is not convex there.
+    fn fit(&self, s: impl Fn(usize) -> f64) -> Option<(f64, usize, f64)> {
+        let w = self.window;
         let (mut best, mut min) = (0, f64::INFINITY);
         for j in 0..=w {
             if s(j) < min {
@@ -235,7 +297,29 @@ impl LatencyEstimator {
             return None;
         }
         let x = i as f64 + 0.5 * (y0 - y2) / den;
-        Some(x.clamp(0.0, w as f64) * self.dt)
+        Some((x * self.dt, i, den))
+    }
+
+    /// The latency estimate (s, within 0 … `W·dt`), once [`MIN_EVIDENCE`] weighted seconds have
+    /// been seen and the sums single out a lag (a convex parabola at the smallest): the vertex
+    /// `L` of the two halves' mean, shrunk by its scatter to `L·max(0, 1 − σ²/L²)` (module
+    /// documentation).
+    pub(super) fn estimate(&self) -> Option<f64> {
+        if self.evidence < MIN_EVIDENCE {
+            return None;
+        }
+        let w = self.window;
+        let (l, _, _) = self.fit(|j| 0.5 * (self.sums[0][w - j] + self.sums[1][w - j]))?;
+        let var = 0.25 * self.scatter;
+        // E[L²] = L_true² + σ²: L² − σ² estimates L_true² without bias, and the shrinkage
+        // L_true²/(L_true² + σ²) that minimizes the compensation's mean square error becomes
+        // (L² − σ²)/L² (positive part: none when the scatter explains the whole estimate)
+        let shrunk = if l * l > var {
+            l * (1.0 - var / (l * l))
+        } else {
+            0.0
+        };
+        Some(shrunk.clamp(0.0, w as f64 * self.dt))
     }
 
     /// Why [`estimate`](Self::estimate) gives none (a message for the C API).

@@ -389,7 +389,10 @@ impl Ahrs {
     /// lag at which the field's change best fits `dm/dt = −ω × m` (see the module
     /// documentation, "Latency"). A readout: the filter does not use it (set
     /// [`AhrsParams::mag_latency`] to compensate a latency); it estimates the latency of the raw
-    /// samples whatever `mag_latency` is.
+    /// samples whatever `mag_latency` is. The value is shrunk towards 0 by its own standard
+    /// error `σ` (from two halves of the data): `L·max(0, 1 − σ²/L²)`, so that a latency the
+    /// data cannot tell from none reads 0 (module `latency`); it is the value the default
+    /// ([`LATENCY_ESTIMATE`]) compensates.
     ///
     /// `None` until 5 s of informative motion have been seen — seconds of samples weighted by
     /// `g²/(g² + 1)`, `g` the change of the rotation rate across the lag window perpendicular
