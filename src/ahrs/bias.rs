@@ -212,20 +212,20 @@ const PINV_DIRECT: f64 = 1e8;
 fn well_conditioned_inverse(s: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     // s = L Lᵀ
     let l00 = s[(0, 0)];
-    if !(l00 > 0.0) {
+    if l00.is_nan() || l00 <= 0.0 {
         return None;
     }
     let l00 = l00.sqrt();
     let l10 = s[(1, 0)] / l00;
     let l20 = s[(2, 0)] / l00;
     let d1 = s[(1, 1)] - l10 * l10;
-    if !(d1 > 0.0) {
+    if d1.is_nan() || d1 <= 0.0 {
         return None;
     }
     let l11 = d1.sqrt();
     let l21 = (s[(2, 1)] - l20 * l10) / l11;
     let d2 = s[(2, 2)] - l20 * l20 - l21 * l21;
-    if !(d2 > 0.0) {
+    if d2.is_nan() || d2 <= 0.0 {
         return None;
     }
     let l22 = d2.sqrt();
@@ -243,7 +243,7 @@ fn well_conditioned_inverse(s: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     let i20 = w20 * w22;
     let i21 = w21 * w22;
     let cond = s.trace() * (i00 + i11 + i22);
-    if !(cond < PINV_DIRECT) {
+    if cond.is_nan() || cond >= PINV_DIRECT {
         return None;
     }
     Some(Matrix3::new(
