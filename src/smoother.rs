@@ -484,7 +484,7 @@ fn handoff_index(n: usize, nominal: f64, has_mag: bool) -> usize {
     if has_mag && (n as f64) > warm + rest {
         warm as usize
     } else {
-        n - 1
+        n.saturating_sub(1)
     }
 }
 
