@@ -2,7 +2,10 @@
 //! simulated IMU stream (`imu_stream.rs`) at 286 Hz (BROAD's rate) and 100 Hz, the whole
 //! recording per iteration; criterion's throughput gives the time per sample. The online AHRS
 //! over the same samples (`ahrs_batch_…`) is the peer: the smoother is two AHRS passes and the
-//! product of their densities per sample.
+//! product of their densities per sample. 10 s is below the smoother's threshold for running
+//! its passes concurrently (`HANDOFF_TIME + PARALLEL_TIME`, 60 s): these medians are the
+//! one-thread path (CPU time and wall time alike); `examples/python/bench_smooth.py` times the
+//! two-thread path on BROAD's three-minute trials.
 
 use bingham::ahrs::{Ahrs, AhrsParams};
 use bingham::smoother::{smooth, SmoothInput, SmoothOutput};

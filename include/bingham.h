@@ -2135,10 +2135,17 @@ enum bingham_status bingham_ahrs_mag_latency_estimate(const struct bingham_ahrs 
  * working memory not available: "cannot allocate"), `BINGHAM_ERR_NUMERICAL`. On any error
  * nothing is written. `n = 0` does nothing.
  *
- * Memory: allocates 56 bytes per sample (`n·56`: the forward pass's orientation and its
+ * Memory: allocates 112 bytes per sample (`n·112`: each pass's orientation and its
  * covariance), freed before it returns; nothing else grows with n (one hour at 1 kHz: about
- * 200 MB). Time: about twice the online AHRS's (docs/speed.md). Thread safety: no shared
- * state; concurrent calls are independent.
+ * 400 MB). Time: two AHRS passes (docs/speed.md), which overlap in wall time on two cores.
+ *
+ * Threads: uses at most two threads, the caller's and one it starts and joins before it
+ * returns: on a recording longer than 60 s with a magnetometer the backward pass runs
+ * concurrently with the forward pass from a fixed point on (30 s into the recording, or the
+ * first second after it at which the forward pass has its latency estimate). The result
+ * depends on the samples only, never on the scheduling: it is the same bit for bit when the
+ * second thread cannot be started (then the call runs on the caller's thread alone).
+ * Thread safety: no shared state; concurrent calls are independent.
  *
  * # Safety
  * `p`: a readable `bingham_ahrs_params`; `gyr`, `acc`: n*3 readable doubles; `mag`: `NULL` or
@@ -2172,8 +2179,8 @@ enum bingham_status bingham_ahrs_smooth(const struct bingham_ahrs_params *p,
  * timestamp that is not finite or not after the previous one, or a step above
  * `BINGHAM_AHRS_MAX_STEP_TIME` (the message names the index). On any error nothing is written.
  *
- * Memory: `n·56` bytes, `n·92` with `bias` (the forward bias estimate and its covariance
- * too), freed before it returns. Thread safety as `bingham_ahrs_smooth()`.
+ * Memory: `n·112` bytes, `n·184` with `bias` (each pass's bias estimate and its covariance
+ * too), freed before it returns. Threads and thread safety as `bingham_ahrs_smooth()`.
  *
  * # Safety
  * As `bingham_ahrs_smooth()`; `t`: `NULL` or n readable doubles; `bias`: `NULL` or n*3

@@ -11,11 +11,12 @@
 //! gyroscope bias the negative of the forward's. It starts as the online AHRS does, from its
 //! first sample (the recording's last), whose evidence no forward posterior before it holds;
 //! its magnetic reference (the field's norm and dip, against which it tests for disturbances)
-//! is the forward pass's final one, not its first sample's, which may lie in a disturbance;
+//! is the forward pass's (at the handoff, below), not its first sample's, which may lie in a
+//! disturbance;
 //! at sample `k` the smoother takes its *predicted* state: the state after sample `k+1` turned
 //! by the gyroscope to sample `k`, before sample `k`'s accelerometer and magnetometer, which
-//! the forward posterior holds already. Its gyroscope has the forward pass's final bias
-//! estimate taken out, so that its bias estimate starts near the truth (its stated bias
+//! the forward posterior holds already. Its gyroscope has the forward pass's bias estimate
+//! (at the handoff) taken out, so that its bias estimate starts near the truth (its stated bias
 //! variance still starts at `bias_std²`).
 //!
 //! The product is formed in the tangent space of the forward mode with the stated (calibrated)
@@ -33,29 +34,48 @@
 //! of samples `≤ k`, the forward posterior none of samples `> k`: nothing is counted twice. The
 //! magnetometer's latency (lagging the gyroscope) is a lead in reversed time: the backward pass
 //! reads the field samples shifted by the forward pass's latency (the parameter, or the
-//! forward's final estimate), interpolated linearly. Without any magnetometer sample the
+//! forward's estimate at the handoff), interpolated linearly. Without any magnetometer sample the
 //! heading is only defined by the forward pass's start, so the backward pass starts from the
 //! forward pass's final state (its heading convention; the tilt of the last samples is then
 //! counted twice, over the last `acc_tau` only).
 //!
-//! Memory: the forward pass's mode (4 `f64`) and stated covariance (6 `f32`) per sample,
-//! [`BYTES_PER_SAMPLE`] bytes; with the smoothed bias requested, its estimate and covariance
-//! too ([`BIAS_BYTES_PER_SAMPLE`] more). Nothing else grows with the recording.
+//! Threads: the backward pass needs three things of the forward pass — its bias estimate, its
+//! magnetic reference and its latency estimate — which it takes at the **handoff**: the
+//! forward pass's values after [`HANDOFF_TIME`] (30 s) of the recording or, when the latency
+//! is the forward pass's estimate (the default), after the first whole second from then on at
+//! which that estimate exists. From the handoff on the two passes run concurrently, the
+//! backward one on a second thread, and the product is formed afterwards, its two halves on
+//! two threads: a call uses at most two threads (the caller's and one it starts and joins
+//! before it returns). The handoff is a function of the recording alone (its length, sample
+//! time and samples), never of the scheduling: the result is the same bit for bit whether the
+//! second thread runs, is slow, or cannot be started (then one thread does both, in turn).
+//! Recordings of at most [`HANDOFF_TIME`] + [`PARALLEL_TIME`], recordings without a
+//! magnetometer (whose backward pass starts from the forward pass's final state) and those in
+//! which the forward pass has no latency estimate before its end take the forward pass's
+//! final values and run the passes one after the other. The function holds no shared state:
+//! concurrent calls are independent (each with its own threads).
+//!
+//! Memory: each pass's mode (4 `f64`) and stated covariance (6 `f32`) per sample,
+//! [`BYTES_PER_SAMPLE`] bytes; with the smoothed bias requested, each pass's estimate and
+//! covariance too ([`BIAS_BYTES_PER_SAMPLE`] more). Nothing else grows with the recording.
 
-use nalgebra::{Matrix3, Matrix4, Vector3, Vector4};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use nalgebra::{Cholesky, Matrix3, Matrix4, Vector3, Vector4, U3};
 
 use crate::ahrs::{Ahrs, AhrsParams, LATENCY_ESTIMATE};
 use crate::error::{Error, Result};
 use crate::quaternion::q4;
 
-/// The bytes the smoother allocates per sample (the forward mode as 4 `f64` and its stated
-/// covariance as 6 `f32`), besides the caller's inputs and outputs.
-pub const BYTES_PER_SAMPLE: usize = std::mem::size_of::<Forward>();
+/// The bytes the smoother allocates per sample, besides the caller's inputs and outputs: each
+/// pass's mode as 4 `f64` and stated covariance as 6 `f32` (the backward pass keeps its own, so
+/// that it can run while the forward pass does, module documentation "Threads").
+pub const BYTES_PER_SAMPLE: usize = 2 * std::mem::size_of::<Forward>();
 
 /// The bytes the smoother allocates per sample in addition to [`BYTES_PER_SAMPLE`] when the
-/// smoothed gyroscope bias is requested (the forward bias estimate as 3 `f32` and its
+/// smoothed gyroscope bias is requested (each pass's bias estimate as 3 `f32` and its
 /// covariance as 6 `f32`).
-pub const BIAS_BYTES_PER_SAMPLE: usize = std::mem::size_of::<ForwardBias>();
+pub const BIAS_BYTES_PER_SAMPLE: usize = 2 * std::mem::size_of::<ForwardBias>();
 
 /// One recording: timestamps (optional), gyroscope, accelerometer and magnetometer samples.
 #[derive(Debug, Clone, Copy)]
@@ -106,12 +126,12 @@ pub struct SmoothOptions {
     /// Whether the backward pass starts from a uniform orientation (true) or, as the online
     /// AHRS does, from its first sample's accelerometer and magnetometer (false, the default).
     pub uniform_start: bool,
-    /// Whether the backward pass takes the forward pass's final magnetic reference (the field's
-    /// norm and dip its disturbance test compares with) instead of its first sample's (default
-    /// true).
+    /// Whether the backward pass takes the forward pass's magnetic reference at the handoff (the
+    /// field's norm and dip its disturbance test compares with) instead of its first sample's
+    /// (default true).
     pub forward_mag_reference: bool,
-    /// Whether the backward pass's gyroscope has the forward pass's final bias estimate taken
-    /// out (default true).
+    /// Whether the backward pass's gyroscope has the forward pass's bias estimate at the handoff
+    /// taken out (default true).
     pub bias_start: bool,
     /// The consistency gate: the squared Mahalanobis distance between the two passes above
     /// which the backward covariance is widened by `distance² / gate` (0: no gate; default
@@ -174,13 +194,21 @@ fn pack(c: &Matrix3<f64>) -> [f32; 6] {
     ]
 }
 
+/// [`pack`] of a row-major 3×3.
+fn pack9(c: &[f64; 9]) -> [f32; 6] {
+    [
+        c[0] as f32,
+        (0.5 * (c[1] + c[3])) as f32,
+        (0.5 * (c[2] + c[6])) as f32,
+        c[4] as f32,
+        (0.5 * (c[5] + c[7])) as f32,
+        c[8] as f32,
+    ]
+}
+
 fn unpack(c: &[f32; 6]) -> Matrix3<f64> {
     let [a, b, d, e, f, g] = c.map(f64::from);
     Matrix3::new(a, b, d, b, e, f, d, f, g)
-}
-
-fn matrix9(c: &[f64; 9]) -> Matrix3<f64> {
-    Matrix3::from_row_slice(c)
 }
 
 /// `e` with `what` in front of its message.
@@ -202,8 +230,15 @@ fn fuse(
     cb: &Matrix3<f64>,
     delta: &Vector3<f64>,
 ) -> Option<(Vector3<f64>, Matrix3<f64>)> {
-    let s = cf + cb;
-    let chol = s.cholesky()?;
+    fuse_with(&(cf + cb).cholesky()?, cf, delta)
+}
+
+/// [`fuse`] with the Cholesky factor of `C_f + C_b` given.
+fn fuse_with(
+    chol: &Cholesky<f64, U3>,
+    cf: &Matrix3<f64>,
+    delta: &Vector3<f64>,
+) -> Option<(Vector3<f64>, Matrix3<f64>)> {
     // K = C_f S⁻¹ (S, C_f symmetric): Kᵀ = S⁻¹ C_f
     let kt = chol.solve(cf);
     let shift = kt.transpose() * delta;
@@ -248,7 +283,9 @@ fn shifted(rows: &[[f64; 3]], k: usize, s: f64) -> [f64; 3] {
 /// `n = 0` is no error (nothing to write).
 ///
 /// Allocates [`BYTES_PER_SAMPLE`] bytes per sample (plus [`BIAS_BYTES_PER_SAMPLE`] with the
-/// bias output), freed before it returns.
+/// bias output), freed before it returns. Uses at most two threads (the caller's and one it
+/// joins before it returns; module documentation, "Threads"); the result does not depend on
+/// them. Thread-safe: no shared state.
 pub fn smooth(params: &AhrsParams, input: &SmoothInput<'_>, out: SmoothOutput<'_>) -> Result<()> {
     smooth_with(params, &SmoothOptions::default(), input, out)
 }
@@ -290,47 +327,36 @@ pub fn smooth_with(
         return Ok(());
     }
     let want_bias = out.bias.is_some() || options.bias == BiasMode::SecondPass;
-    let mut fwd = Vec::new();
-    fwd.try_reserve_exact(n).map_err(|_| {
-        Error::InvalidArgument(format!("cannot allocate the smoother's {n} samples"))
-    })?;
-    let mut bias = Vec::new();
-    if want_bias {
-        bias.try_reserve_exact(n).map_err(|_| {
-            Error::InvalidArgument(format!("cannot allocate the smoother's {n} bias samples"))
-        })?;
-    }
-    let bias_store = want_bias.then_some(&mut bias);
-    run(params, options, input, &mut fwd, bias_store)?;
+    let (mut fwd, mut bias) = run(params, options, input, want_bias, true)?;
     if options.bias == BiasMode::SecondPass {
         // the gyroscope minus the smoothed bias, the passes again: the bias estimates then
         // start at the smoothed bias instead of zero
-        let mut gyr2 = Vec::new();
-        gyr2.try_reserve_exact(n).map_err(|_| {
-            Error::InvalidArgument(format!("cannot allocate the smoother's {n} samples"))
-        })?;
+        let first = bias.unwrap_or_default();
+        let mut gyr2 = room(n, "samples")?;
         gyr2.extend(
             input
                 .gyr
                 .iter()
-                .zip(&bias)
+                .zip(&first)
                 .map(|(g, b)| std::array::from_fn::<f64, 3, _>(|j| g[j] - f64::from(b.b[j]))),
         );
-        let first = bias.clone();
         let input2 = SmoothInput {
             gyr: &gyr2,
             ..*input
         };
-        fwd.clear();
-        bias.clear();
-        run(params, options, &input2, &mut fwd, Some(&mut bias))?;
+        drop(fwd);
+        let (fwd2, bias2) = run(params, options, &input2, true, true)?;
+        fwd = fwd2;
+        let mut second = bias2.unwrap_or_default();
         // the bias output: the first passes' smoothed bias plus the second's residual
-        for (b, f) in bias.iter_mut().zip(&first) {
+        for (b, f) in second.iter_mut().zip(&first) {
             for j in 0..3 {
                 b.b[j] += f.b[j];
             }
         }
+        bias = Some(second);
     }
+    let bias = bias.unwrap_or_default();
     // success: the outputs
     for (o, f) in out.quat.iter_mut().zip(&fwd) {
         *o = f.q;
@@ -385,83 +411,219 @@ fn step_time(time: Option<&[f64]>, k: usize, nominal: f64) -> f64 {
     }
 }
 
-/// The forward and the backward pass: `fwd` (and `bias`) filled with the smoothed values.
-fn run(
+/// The seconds of recording the forward pass runs alone before it hands its bias estimate,
+/// magnetic reference and latency estimate to the backward pass, which then runs concurrently
+/// with it (module documentation, "Threads").
+pub const HANDOFF_TIME: f64 = 30.0;
+
+/// The seconds of recording after [`HANDOFF_TIME`] below which the passes run one after the
+/// other, the backward pass starting from the forward pass's final values (a second thread
+/// would gain little).
+pub const PARALLEL_TIME: f64 = 30.0;
+
+/// The forward pass's values the backward pass starts from, taken after sample
+/// [`handoff_index`].
+#[derive(Debug, Clone, Copy)]
+struct Handoff {
+    /// The bias estimate taken out of the backward pass's gyroscope.
+    bias: [f64; 3],
+    /// The magnetic reference (norm, dip) the backward pass's disturbance test compares with.
+    mag_reference: Option<(f64, f64)>,
+    /// The magnetometer's latency (s) by which the backward pass shifts the field samples.
+    mag_latency: f64,
+    /// Without a magnetometer: the forward pass's final state, the backward pass's start.
+    state: Option<([f64; 16], [f64; 4])>,
+}
+
+impl Handoff {
+    fn take(
+        ahrs: &Ahrs,
+        params: &AhrsParams,
+        options: &SmoothOptions,
+        has_mag: bool,
+    ) -> Result<Handoff> {
+        let mag_latency = if params.mag_latency == LATENCY_ESTIMATE {
+            ahrs.mag_latency_estimate().unwrap_or(0.0)
+        } else {
+            params.mag_latency
+        };
+        let state = if has_mag {
+            None
+        } else {
+            let mut m = [0.0; 16];
+            let mut z = [0.0; 4];
+            ahrs.state_into(&mut m, &mut z)?;
+            Some((m, z))
+        };
+        Ok(Handoff {
+            bias: if options.bias_start {
+                ahrs.gyro_bias()
+            } else {
+                [0.0; 3]
+            },
+            mag_reference: if options.forward_mag_reference {
+                ahrs.mag_reference()
+            } else {
+                None
+            },
+            mag_latency,
+            state,
+        })
+    }
+}
+
+/// The earliest sample after which the forward pass hands its values to the backward pass
+/// (later while it has no latency estimate, [`latency_ready`]): [`HANDOFF_TIME`] into the recording (in nominal periods) when a magnetometer is present and
+/// at least [`PARALLEL_TIME`] follows; otherwise the last sample (without a magnetometer the
+/// backward pass starts from the forward pass's final state, its heading convention). A
+/// function of the recording alone: the result does not depend on whether the passes run
+/// concurrently.
+fn handoff_index(n: usize, nominal: f64, has_mag: bool) -> usize {
+    let warm = (HANDOFF_TIME / nominal).ceil();
+    let rest = (PARALLEL_TIME / nominal).ceil();
+    if has_mag && (n as f64) > warm + rest {
+        warm as usize
+    } else {
+        n.saturating_sub(1)
+    }
+}
+
+/// Whether the forward pass has the magnetometer's latency the backward pass needs: the
+/// parameter, or the forward pass's estimate once there is one.
+fn latency_ready(ahrs: &Ahrs, params: &AhrsParams) -> bool {
+    params.mag_latency != LATENCY_ESTIMATE || ahrs.mag_latency_estimate().is_some()
+}
+
+/// What a pass keeps per sample: its mode and stated covariance, its bias estimate and
+/// covariance if wanted, its Bingham exponent if the exact product is wanted.
+struct Pass {
+    states: Vec<Forward>,
+    bias: Option<Vec<ForwardBias>>,
+    exponents: Vec<Matrix4<f64>>,
+}
+
+/// A vector with room for `n` elements, or the error saying it cannot be allocated.
+fn room<T>(n: usize, what: &str) -> Result<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| {
+        Error::InvalidArgument(format!("cannot allocate the smoother's {n} {what}"))
+    })?;
+    Ok(v)
+}
+
+impl Pass {
+    fn new(n: usize, want_bias: bool, exact: bool) -> Result<Pass> {
+        Ok(Pass {
+            states: room(n, "samples")?,
+            bias: if want_bias {
+                Some(room(n, "bias samples")?)
+            } else {
+                None
+            },
+            exponents: if exact {
+                room(n, "exponents")?
+            } else {
+                Vec::new()
+            },
+        })
+    }
+}
+
+/// The forward pass: the online AHRS over the recording, its states into `store`, the handoff
+/// taken after sample `at`.
+fn forward_pass(
     params: &AhrsParams,
     options: &SmoothOptions,
     input: &SmoothInput<'_>,
-    fwd: &mut Vec<Forward>,
-    mut bias: Option<&mut Vec<ForwardBias>>,
+    has_mag: bool,
+    at: usize,
+    store: &mut Pass,
+    mut handoff: impl FnMut(Handoff),
 ) -> Result<()> {
-    let n = input.gyr.len();
     let nominal = params.sample_time;
-    // the forward pass: the online AHRS
     let mut ahrs = Ahrs::new(params)?;
     let exact = options.fusion == Fusion::Bingham;
-    let mut exponents: Vec<Matrix4<f64>> = Vec::new();
+    let n = input.gyr.len();
+    let stride = ((1.0 / nominal).ceil() as usize).max(1);
+    let mut handed = false;
     for k in 0..n {
         let m = input.mag.map(|m| &m[k]);
         let dt = step_time(input.time, k, nominal);
         ahrs.update_dt(dt, &input.gyr[k], &input.acc[k], m)
             .map_err(|e| prefix(e, &format!("sample {k}")))?;
-        let c = matrix9(&ahrs.orientation_covariance()?);
-        fwd.push(Forward {
+        store.states.push(Forward {
             q: ahrs.quaternion(),
-            c: pack(&c),
+            c: pack9(&ahrs.orientation_covariance()?),
         });
         if exact {
-            exponents.push(exponent(&ahrs)?);
+            store.exponents.push(exponent(&ahrs)?);
         }
-        if let Some(b) = bias.as_deref_mut() {
-            let g = ahrs.gyro_bias();
+        if let Some(b) = store.bias.as_mut() {
             b.push(ForwardBias {
-                b: g.map(|x| x as f32),
-                p: pack(&matrix9(&ahrs.gyro_bias_covariance())),
+                b: ahrs.gyro_bias().map(|x| x as f32),
+                p: pack9(&ahrs.gyro_bias_covariance()),
             });
         }
+        // the handoff: at `at` or, when the latency is the forward pass's estimate, at the
+        // first whole second after it with an estimate; at the last sample at the latest
+        if !handed
+            && k >= at
+            && (k + 1 == n || ((k - at) % stride == 0 && latency_ready(&ahrs, params)))
+        {
+            handed = true;
+            handoff(Handoff::take(&ahrs, params, options, has_mag)?);
+        }
     }
+    Ok(())
+}
+
+/// The backward pass (module documentation) from the forward pass's handoff: its predicted
+/// state at every sample `k < start` into `store` (index `start − 1 − k`), `start` the sample
+/// it starts at (the last with a usable accelerometer), which it returns. Stops (returning
+/// `Ok(0)`) when `abort` is set.
+fn backward_pass(
+    params: &AhrsParams,
+    options: &SmoothOptions,
+    input: &SmoothInput<'_>,
+    handoff: &Handoff,
+    store: &mut Pass,
+    abort: &AtomicBool,
+) -> Result<usize> {
+    let n = input.gyr.len();
+    let nominal = params.sample_time;
+    let exact = options.fusion == Fusion::Bingham;
     // the backward pass's magnetometer: the forward's latency as a shift of the samples
-    let mag_latency = if params.mag_latency == LATENCY_ESTIMATE {
-        ahrs.mag_latency_estimate().unwrap_or(0.0)
-    } else {
-        params.mag_latency
-    };
-    let mag_shift = mag_latency / nominal;
+    let mag_shift = handoff.mag_latency / nominal;
     let acc_shift = params.acc_latency / nominal;
-    let has_mag = input
-        .mag
-        .is_some_and(|m| m.iter().any(|r| usable(r) && r.iter().any(|x| *x != 0.0)));
     let mut bp = *params;
     bp.mag_latency = 0.0;
     bp.acc_latency = 0.0;
-    // the backward pass's gyroscope: the forward pass's final bias estimate taken out, so that
-    // the backward bias estimate (of what remains) starts near zero instead of at the bias;
-    // its stated bias variance still starts at bias_std² (conservative: nothing counted twice)
-    let b_end = if options.bias_start {
-        ahrs.gyro_bias()
-    } else {
-        [0.0; 3]
-    };
+    // the backward pass's gyroscope: the forward pass's bias estimate taken out, so that the
+    // backward bias estimate (of what remains) starts near zero instead of at the bias; its
+    // stated bias variance still starts at bias_std² (conservative: nothing counted twice)
+    let b_end = handoff.bias;
     let mut back = Ahrs::new(&bp)?;
-    if has_mag {
-        if options.uniform_start {
-            // uniform: the backward pass holds the future's evidence only
-            let eye = [
-                1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
-            ];
-            back.set_state(&eye, &[0.0; 4])?;
+    match &handoff.state {
+        // without a magnetometer the heading's convention is the forward pass's start: carry
+        // it over
+        Some((m, z)) => back.set_state(m, z)?,
+        None => {
+            if options.uniform_start {
+                // uniform: the backward pass holds the future's evidence only
+                let eye = [
+                    1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+                ];
+                back.set_state(&eye, &[0.0; 4])?;
+            }
+            // else: the AHRS's own start from its first sample (the recording's last):
+            // evidence of that sample only, which no forward posterior before it holds
         }
-        // else: the AHRS's own start from its first sample (the recording's last): evidence of
-        // that sample only, which no forward posterior before it holds
-    } else {
-        // the heading's convention is the forward pass's start: carry it over
-        let mut m = [0.0; 16];
-        let mut z = [0.0; 4];
-        ahrs.state_into(&mut m, &mut z)?;
-        back.set_state(&m, &z)?;
     }
-    let mut started = false;
+    let mut start = None;
     for k in (0..n).rev() {
+        if k % 4096 == 0 && abort.load(Ordering::Relaxed) {
+            return Ok(0);
+        }
         // the backward pass's sample for sample k: the turn from k+1 to k, k's own sensors
         let (g, dt) = if k + 1 < n {
             (input.gyr[k + 1], step_time(input.time, k + 1, nominal))
@@ -469,70 +631,42 @@ fn run(
             (input.gyr[k], nominal)
         };
         let g = [b_end[0] - g[0], b_end[1] - g[1], b_end[2] - g[2]];
-        if started {
+        if start.is_some() {
             // the predicted state at k: the state after k+1 turned by the gyroscope to k
             let b = back.gyro_bias();
+            let qk = back.quaternion();
             let qb = if usable(&g) {
                 let w = [(g[0] - b[0]) * dt, (g[1] - b[1]) * dt, (g[2] - b[2]) * dt];
-                q4::mul(&back.quaternion(), &q4::from_rotation_vector(&w))
+                q4::mul(&qk, &q4::from_rotation_vector(&w))
             } else {
-                back.quaternion()
+                qk
             };
-            let mut cb = matrix9(&back.orientation_covariance()?);
-            let f = &mut fwd[k];
-            let qf = f.q;
-            let cf = unpack(&f.c);
-            let d = q4::to_rotation_vector(&q4::mul(&qb, &q4::conj(&qf)));
-            let dv = Vector3::new(d[0], d[1], d[2]);
-            // the consistency gate: a backward state farther from the forward one than their
-            // covariances allow (a start, a magnetic reference taken in a disturbance) is
-            // widened until it is consistent
-            if options.gate > 0.0 {
-                if let Some(chol) = (cf + cb).cholesky() {
-                    let m2 = dv.dot(&chol.solve(&dv));
-                    if m2 > options.gate {
-                        cb *= m2 / options.gate;
-                    }
-                }
+            store.states.push(Forward {
+                q: qb,
+                c: pack9(&back.orientation_covariance()?),
+            });
+            if exact {
+                // the backward exponent turned to k: p(q) = p_{k+1}(q ⊗ dq*)
+                let dq = q4::conj(&q4::mul(&q4::conj(&qk), &qb));
+                let r = Matrix4::from_fn(|i, j| {
+                    let mut e = [0.0; 4];
+                    e[j] = 1.0;
+                    q4::mul(&e, &dq)[i]
+                });
+                store.exponents.push(r.transpose() * exponent(&back)? * r);
             }
-            if let Some((shift, cs)) = fuse(&cf, &cb, &dv) {
-                let q = if exact {
-                    // the backward exponent turned to k: p(q) = p_{k+1}(q ⊗ dq*)
-                    let dq = q4::conj(&q4::mul(&q4::conj(&back.quaternion()), &qb));
-                    let r = Matrix4::from_fn(|i, j| {
-                        let mut e = [0.0; 4];
-                        e[j] = 1.0;
-                        q4::mul(&e, &dq)[i]
-                    });
-                    let a = exponents[k] + r.transpose() * exponent(&back)? * r;
-                    let eig = a.symmetric_eigen();
-                    let i = eig.eigenvalues.imax();
-                    let v = eig.eigenvectors.column(i);
-                    [v[0], v[1], v[2], v[3]]
-                } else {
-                    q4::mul(&q4::from_rotation_vector(&[shift.x, shift.y, shift.z]), &qf)
-                };
-                let nq = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-                let s = if q[0] < 0.0 { -1.0 / nq } else { 1.0 / nq };
-                f.q = q.map(|x| x * s);
-                f.c = pack(&cs);
-            }
-            if let Some(bs) = bias.as_deref_mut() {
-                let fb = &mut bs[k];
-                let bf = Vector3::new(fb.b[0], fb.b[1], fb.b[2]).map(f64::from);
-                let pf = unpack(&fb.p);
-                let bb = Vector3::from(b_end) - Vector3::from(b);
-                let pb = matrix9(&back.gyro_bias_covariance());
-                if let Some((shift, ps)) = fuse(&pf, &pb, &(bb - bf)) {
-                    let bsm = bf + shift;
-                    fb.b = [bsm.x as f32, bsm.y as f32, bsm.z as f32];
-                    fb.p = pack(&ps);
-                }
+            if let Some(bs) = store.bias.as_mut() {
+                // the backward estimate of the original gyroscope's bias
+                let bb: [f64; 3] = std::array::from_fn(|j| b_end[j] - b[j]);
+                bs.push(ForwardBias {
+                    b: bb.map(|x| x as f32),
+                    p: pack9(&back.gyro_bias_covariance()),
+                });
             }
         }
         let acc = shifted(input.acc, k, acc_shift);
         let mag = input.mag.map(|m| shifted(m, k, mag_shift));
-        if !started {
+        if start.is_none() {
             // the backward pass starts at the last sample with a usable accelerometer
             let a2 = acc.iter().map(|x| x * x).sum::<f64>();
             if !(a2.is_finite() && a2.sqrt() >= 0.25 * params.gravity) {
@@ -541,17 +675,237 @@ fn run(
         }
         back.update_dt(dt, &g, &acc, mag.as_ref())
             .map_err(|e| prefix(e, &format!("backward pass, sample {k}")))?;
-        if !started && options.forward_mag_reference {
+        if start.is_none() {
             // the field's reference (norm and dip, what the disturbance test compares with)
-            // from the forward pass over the whole recording, not from the last sample, which
-            // may lie in a disturbance (a magnet attached for the rest of the recording)
-            if let Some(r) = ahrs.mag_reference() {
+            // from the forward pass, not from the last sample, which may lie in a disturbance
+            // (a magnet attached for the rest of the recording)
+            if let Some(r) = handoff.mag_reference {
                 back.set_mag_reference(r);
             }
+            start = Some(k);
         }
-        started = true;
     }
-    Ok(())
+    Ok(start.unwrap_or(0))
+}
+
+/// The product at one sample (module documentation): the forward state `f` (and bias `fb`)
+/// replaced by the smoothed one, from the backward prediction `b` (and `bb`); `exps` the two
+/// Bingham exponents for [`Fusion::Bingham`].
+fn product(
+    options: &SmoothOptions,
+    f: &mut Forward,
+    b: &Forward,
+    exps: Option<(&Matrix4<f64>, &Matrix4<f64>)>,
+    bias: Option<(&mut ForwardBias, &ForwardBias)>,
+) {
+    let qf = f.q;
+    let cf = unpack(&f.c);
+    let mut cb = unpack(&b.c);
+    let d = q4::to_rotation_vector(&q4::mul(&b.q, &q4::conj(&qf)));
+    let dv = Vector3::new(d[0], d[1], d[2]);
+    let mut chol = (cf + cb).cholesky();
+    // the consistency gate: a backward state farther from the forward one than their
+    // covariances allow (a start, a magnetic reference taken in a disturbance) is widened
+    // until it is consistent
+    if options.gate > 0.0 {
+        if let Some(c) = &chol {
+            let m2 = dv.dot(&c.solve(&dv));
+            if m2 > options.gate {
+                cb *= m2 / options.gate;
+                chol = (cf + cb).cholesky();
+            }
+        }
+    }
+    if let Some((shift, cs)) = chol.and_then(|c| fuse_with(&c, &cf, &dv)) {
+        let q = match exps {
+            Some((ef, eb)) => {
+                let a = ef + eb;
+                let eig = a.symmetric_eigen();
+                let i = eig.eigenvalues.imax();
+                let v = eig.eigenvectors.column(i);
+                [v[0], v[1], v[2], v[3]]
+            }
+            None => q4::mul(&q4::from_rotation_vector(&[shift.x, shift.y, shift.z]), &qf),
+        };
+        let nq = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let s = if q[0] < 0.0 { -1.0 / nq } else { 1.0 / nq };
+        f.q = q.map(|x| x * s);
+        f.c = pack(&cs);
+    }
+    if let Some((fb, bb)) = bias {
+        let bf = Vector3::new(fb.b[0], fb.b[1], fb.b[2]).map(f64::from);
+        let pf = unpack(&fb.p);
+        let bbv = Vector3::new(bb.b[0], bb.b[1], bb.b[2]).map(f64::from);
+        let pb = unpack(&bb.p);
+        if let Some((shift, ps)) = fuse(&pf, &pb, &(bbv - bf)) {
+            let bsm = bf + shift;
+            fb.b = [bsm.x as f32, bsm.y as f32, bsm.z as f32];
+            fb.p = pack(&ps);
+        }
+    }
+}
+
+/// The number of samples from which the product runs on two threads.
+const PARALLEL_PRODUCT: usize = 1 << 14;
+
+/// A run of samples for the product: the forward states (and bias, exponents) in order, the
+/// backward predictions of the same samples stored in reverse (`back[len − 1 − i]` for
+/// `states[i]`).
+struct Half<'a> {
+    states: &'a mut [Forward],
+    exponents: &'a [Matrix4<f64>],
+    bias: Option<&'a mut [ForwardBias]>,
+    back: &'a [Forward],
+    back_exponents: &'a [Matrix4<f64>],
+    back_bias: Option<&'a [ForwardBias]>,
+}
+
+impl Half<'_> {
+    fn apply(mut self, options: &SmoothOptions) {
+        let len = self.states.len();
+        let exact = !self.exponents.is_empty();
+        for i in 0..len {
+            let j = len - 1 - i;
+            let exps = exact.then(|| (&self.exponents[i], &self.back_exponents[j]));
+            let bias = match (self.bias.as_deref_mut(), self.back_bias) {
+                (Some(f), Some(b)) => Some((&mut f[i], &b[j])),
+                _ => None,
+            };
+            product(options, &mut self.states[i], &self.back[j], exps, bias);
+        }
+    }
+}
+
+/// The forward and the backward pass and their product: the smoothed states (and bias).
+/// With [`handoff_index`] before the last sample the backward pass runs on a second thread
+/// from the handoff on (module documentation, "Threads"); one thread if it cannot be started,
+/// with the same result.
+fn run(
+    params: &AhrsParams,
+    options: &SmoothOptions,
+    input: &SmoothInput<'_>,
+    want_bias: bool,
+    threads: bool,
+) -> Result<(Vec<Forward>, Option<Vec<ForwardBias>>)> {
+    let n = input.gyr.len();
+    let exact = options.fusion == Fusion::Bingham;
+    let has_mag = input
+        .mag
+        .is_some_and(|m| m.iter().any(|r| usable(r) && r.iter().any(|x| *x != 0.0)));
+    let at = handoff_index(n, params.sample_time, has_mag);
+    let mut fwd = Pass::new(n, want_bias, exact)?;
+    let mut back = Pass::new(n.saturating_sub(1), want_bias, exact)?;
+    let abort = AtomicBool::new(false);
+    let mut handoff = None;
+    let mut back_result = None;
+    std::thread::scope(|s| -> Result<()> {
+        let (tx, rx) = std::sync::mpsc::channel::<Handoff>();
+        let back_ref = &mut back;
+        let abort_ref = &abort;
+        let thread = if threads && at + 1 < n {
+            std::thread::Builder::new()
+                .name("bingham-smooth".into())
+                .spawn_scoped(s, move || -> Option<Result<usize>> {
+                    let h = rx.recv().ok()?;
+                    Some(backward_pass(
+                        params, options, input, &h, back_ref, abort_ref,
+                    ))
+                })
+                .ok()
+        } else {
+            None
+        };
+        let concurrent = thread.is_some();
+        let fres = forward_pass(params, options, input, has_mag, at, &mut fwd, |h| {
+            handoff = Some(h);
+            if concurrent {
+                // a closed channel: the thread has ended, the result says why
+                let _ = tx.send(h);
+            }
+        });
+        drop(tx);
+        if fres.is_err() {
+            abort.store(true, Ordering::Relaxed);
+        }
+        if let Some(t) = thread {
+            back_result = Some(
+                t.join()
+                    .unwrap_or_else(|_| {
+                        Some(Err(Error::Numerical(
+                            "the smoother's backward pass panicked".into(),
+                        )))
+                    })
+                    .unwrap_or(Ok(0)),
+            );
+        }
+        fres
+    })?;
+    let start = match back_result {
+        Some(r) => r?,
+        None => {
+            let h = handoff.ok_or_else(|| {
+                Error::Numerical("the smoother's forward pass gave no handoff".into())
+            })?;
+            backward_pass(params, options, input, &h, &mut back, &abort)?
+        }
+    };
+    // the product at every sample the backward pass predicted, the two halves on two threads
+    let start = start.min(back.states.len()).min(n);
+    let (mid, rest) = (start / 2, start - start / 2);
+    let (f_lo, f_hi) = fwd.states[..start].split_at_mut(mid);
+    // the backward states are stored from sample start − 1 down: the upper half first
+    let (b_hi, b_lo) = back.states.split_at(rest);
+    let (e_lo, e_hi) = fwd.exponents.split_at(if exact { mid } else { 0 });
+    let (be_hi, be_lo) = back.exponents.split_at(if exact { rest } else { 0 });
+    let (fb_lo, fb_hi) = match fwd.bias.as_mut() {
+        Some(f) => {
+            let (a, b) = f.split_at_mut(mid);
+            (Some(a), Some(b))
+        }
+        None => (None, None),
+    };
+    let (bb_hi, bb_lo) = match back.bias.as_ref() {
+        Some(b) => {
+            let (h, l) = b.split_at(rest);
+            (Some(h), Some(l))
+        }
+        None => (None, None),
+    };
+    let lo = Half {
+        states: f_lo,
+        exponents: e_lo,
+        bias: fb_lo,
+        back: b_lo,
+        back_exponents: be_lo,
+        back_bias: bb_lo,
+    };
+    let hi = Half {
+        states: f_hi,
+        exponents: e_hi,
+        bias: fb_hi,
+        back: b_hi,
+        back_exponents: be_hi,
+        back_bias: bb_hi,
+    };
+    let hi = std::sync::Mutex::new(Some(hi));
+    let run_hi = || {
+        if let Some(h) = hi.lock().ok().and_then(|mut h| h.take()) {
+            h.apply(options);
+        }
+    };
+    if threads && start >= PARALLEL_PRODUCT {
+        std::thread::scope(|s| {
+            // no thread: the half is left for this one
+            let _ = std::thread::Builder::new()
+                .name("bingham-smooth".into())
+                .spawn_scoped(s, run_hi);
+            lo.apply(options);
+        });
+    } else {
+        lo.apply(options);
+    }
+    run_hi();
+    Ok((fwd.states, fwd.bias))
 }
 
 #[cfg(test)]
@@ -632,6 +986,69 @@ mod tests {
                 cov[(i, i)],
                 cs[(i, i)]
             );
+        }
+    }
+
+    /// The passes on two threads give the result of one thread bit for bit (the handoff and
+    /// the product's halves are functions of the recording alone), with the bias and the exact
+    /// product, on a recording long enough for both to be concurrent.
+    #[test]
+    fn two_threads_give_the_result_of_one() {
+        let mut rng = Rng(7);
+        let dt = 0.01;
+        let n = 9000; // 90 s: the handoff after 30 s, 60 s concurrent
+        let mut gyr = Vec::with_capacity(n);
+        let mut acc = Vec::with_capacity(n);
+        let mut mag = Vec::with_capacity(n);
+        let mut q = [1.0, 0.0, 0.0, 0.0];
+        for k in 0..n {
+            let t = k as f64 * dt;
+            let w = [
+                0.5 * (0.7 * t).sin(),
+                0.4 * (0.3 * t).cos(),
+                0.6 * (0.2 * t).sin(),
+            ];
+            q = q4::mul(&q, &q4::from_rotation_vector(&w.map(|x| x * dt)));
+            let r = q4::to_matrix(&q);
+            // the world's gravity reaction (up) and field (north, down) in the sensor frame
+            let body = |v: [f64; 3]| -> [f64; 3] {
+                std::array::from_fn(|i| r[0][i] * v[0] + r[1][i] * v[1] + r[2][i] * v[2])
+            };
+            let a = body([0.0, 0.0, 9.81]);
+            let m = body([0.0, 20.0, -40.0]);
+            gyr.push(std::array::from_fn(|i| w[i] + 0.01 + 0.002 * rng.normal()));
+            acc.push(std::array::from_fn(|i| a[i] + 0.05 * rng.normal()));
+            mag.push(std::array::from_fn(|i| m[i] + 0.3 * rng.normal()));
+        }
+        let input = SmoothInput {
+            time: None,
+            gyr: &gyr,
+            acc: &acc,
+            mag: Some(&mag),
+        };
+        // a fixed latency: the handoff at HANDOFF_TIME; the estimate: when it exists
+        for (latency, fusion) in [
+            (0.0, Fusion::Tangent),
+            (0.0, Fusion::Bingham),
+            (LATENCY_ESTIMATE, Fusion::Tangent),
+        ] {
+            let mut params = AhrsParams::new(dt);
+            params.mag_latency = latency;
+            let options = SmoothOptions {
+                fusion,
+                ..SmoothOptions::default()
+            };
+            let at = handoff_index(n, dt, true);
+            assert!(at + 1 < n && at > 0, "{at}");
+            let (f1, b1) = run(&params, &options, &input, true, false).unwrap();
+            let (f2, b2) = run(&params, &options, &input, true, true).unwrap();
+            let (b1, b2) = (b1.unwrap(), b2.unwrap());
+            for k in 0..n {
+                assert_eq!(f1[k].q, f2[k].q, "sample {k}");
+                assert_eq!(f1[k].c, f2[k].c, "sample {k}");
+                assert_eq!(b1[k].b, b2[k].b, "sample {k}");
+                assert_eq!(b1[k].p, b2[k].p, "sample {k}");
+            }
         }
     }
 

@@ -17,9 +17,9 @@ from ._library import lib
 __all__ = ["smooth", "Smoothed", "BYTES_PER_SAMPLE", "BIAS_BYTES_PER_SAMPLE"]
 
 #: The bytes the smoother allocates per sample (``bingham_ahrs_smooth``).
-BYTES_PER_SAMPLE = 56
+BYTES_PER_SAMPLE = 112
 #: The further bytes per sample with the bias output (``full=True``).
-BIAS_BYTES_PER_SAMPLE = 36
+BIAS_BYTES_PER_SAMPLE = 72
 
 
 class Smoothed(NamedTuple):
@@ -56,7 +56,8 @@ def smooth(
     sample without gravity, a gyroscope row turning more than 1e6 rad, timestamps not
     increasing; the message names the sample) and :class:`ValueError` for wrong shapes. Memory:
     :data:`BYTES_PER_SAMPLE` bytes per sample besides the arrays (:data:`BIAS_BYTES_PER_SAMPLE`
-    more with ``full=True``)."""
+    more with ``full=True``). Runs the backward pass on a second thread on recordings of more
+    than a minute (the result does not depend on it; ``bingham_ahrs_smooth``'s threads)."""
     if params is None:
         sample_time = float(sample_time)
         _refuse_rate(sample_time, "smooth")
