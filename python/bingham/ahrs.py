@@ -378,8 +378,8 @@ class Ahrs(_Handle):
 
     def mag_latency_estimate(self) -> Optional[float]:
         """The online estimate of the magnetometer's latency behind the gyroscope (seconds,
-        0 to 40 ms or 32 samples, whichever is smaller), from the IMU alone; ``None`` until
-        5 s of informative motion (a changing rotation rate with an undisturbed magnetometer)
+        0 to 40 ms in samples rounded up to an even number, 2 to 32 samples), from the IMU
+        alone; ``None`` until 5 s of informative motion (a changing rotation rate with an undisturbed magnetometer)
         have been seen. Shrunk towards 0 by its own standard error (a latency the data cannot
         tell from none reads 0). A readout: pass it as ``mag_latency`` to compensate the
         latency (the default compensates this value)."""

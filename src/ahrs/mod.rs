@@ -385,9 +385,9 @@ impl Ahrs {
     }
 
     /// The online estimate of the magnetometer's latency behind the gyroscope (s, within 0 and
-    /// 40 ms or 32 samples, whichever is smaller; at least 2 samples), from the IMU alone: the
-    /// lag at which the field's change best fits `dm/dt = −ω × m` (see the module
-    /// documentation, "Latency"). A readout: the filter does not use it (set
+    /// 40 ms in samples rounded up to an even number, at least 2 and at most 32 samples), from
+    /// the IMU alone: the lag at which the field's change best fits `dm/dt = −ω × m` (see the
+    /// module documentation, "Latency"). A readout: the filter does not use it (set
     /// [`AhrsParams::mag_latency`] to compensate a latency); it estimates the latency of the raw
     /// samples whatever `mag_latency` is. The value is shrunk towards 0 by its own standard
     /// error `σ` (from two halves of the data): `L·max(0, 1 − σ²/L²)`, so that a latency the

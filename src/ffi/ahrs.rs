@@ -678,8 +678,8 @@ pub unsafe extern "C" fn bingham_ahrs_orientation_covariance(
 /// measures (in a homogeneous field `dm/dt = -w x m` in the sensor frame). A readout: the
 /// filter does not use it; to compensate a latency, set `mag_latency` in
 /// `bingham_ahrs_params`. It estimates the latency of the raw samples, whatever `mag_latency`
-/// is. Range: 0 to 40 ms or 32 samples, whichever is smaller (at least 2 samples). Time
-/// convention: gyroscope sample k is the rate over the interval (t_{k-1}, t_k], as in the
+/// is. Range: 0 to 40 ms in samples rounded up to an even number, at least 2 and at most 32
+/// samples. Time convention: gyroscope sample k is the rate over the interval (t_{k-1}, t_k], as in the
 /// prediction (for a gyroscope that samples the rate at t_k the estimate is the latency plus
 /// half a sample, which is what the compensation needs). The value is shrunk towards 0 by the
 /// estimate's own standard error (from two halves of the data): L * max(0, 1 - s^2/L^2), so
