@@ -624,23 +624,23 @@ fn backward_pass(
         if k % 4096 == 0 && abort.load(Ordering::Relaxed) {
             return Ok(0);
         }
-        // the backward pass's sample for sample k: the turn from k+1 to k, k's own sensors
+        // the backward pass's sample for sample k: the turn from k+1 to k, k's own sensors;
+        // over a longer interval (dropped samples) the recorded sample k+1 covers the end of
+        // the interval, and the rest is bridged with the mean of the rates of k+1 and k, as
+        // the forward pass bridges it (module `gyro`)
         let (g, dt) = if k + 1 < n {
             (input.gyr[k + 1], step_time(input.time, k + 1, nominal))
         } else {
             (input.gyr[k], nominal)
         };
         let g = [b_end[0] - g[0], b_end[1] - g[1], b_end[2] - g[2]];
+        let far = input.gyr[k];
+        let far = [b_end[0] - far[0], b_end[1] - far[1], b_end[2] - far[2]];
         if start.is_some() {
             // the predicted state at k: the state after k+1 turned by the gyroscope to k
             let b = back.gyro_bias();
             let qk = back.quaternion();
-            let qb = if usable(&g) {
-                let w = [(g[0] - b[0]) * dt, (g[1] - b[1]) * dt, (g[2] - b[2]) * dt];
-                q4::mul(&qk, &q4::from_rotation_vector(&w))
-            } else {
-                qk
-            };
+            let qb = back.reversed_prediction(dt, &g, &far);
             store.states.push(Forward {
                 q: qb,
                 c: pack9(&back.orientation_covariance()?),
@@ -673,7 +673,7 @@ fn backward_pass(
                 continue;
             }
         }
-        back.update_dt(dt, &g, &acc, mag.as_ref())
+        back.update_reversed(dt, &g, &far, &acc, mag.as_ref())
             .map_err(|e| prefix(e, &format!("backward pass, sample {k}")))?;
         if start.is_none() {
             // the field's reference (norm and dip, what the disturbance test compares with)

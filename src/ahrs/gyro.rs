@@ -54,31 +54,36 @@ pub(super) struct Turn {
 }
 
 impl Gyro {
-    /// One sample `h` seconds after the previous one (step 2), `gyr` (rad/s; `None`: a gap,
-    /// `missing` seconds since the last sample before this one): turns `core`, accumulates the
-    /// process noise and predicts the bias (`bias`; its random walk held over a rest of
-    /// `rest`).
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn step(
-        &mut self,
-        p: &AhrsParams,
-        core: &mut Core<4>,
-        bias: &mut BiasState,
-        rest: &mut Rest,
-        missing: f64,
+    /// The increment of a sample `h` seconds after the previous one with the raw rate `gyr`
+    /// (rad/s; `None`: a gap, the last rate held), the bias `b` taken out: what [`Gyro::step`]
+    /// turns the state by. With `far` (a pass over reversed time, module `smoother`: the raw
+    /// rate on the far side of the interval, the sample before it in recorded time) the
+    /// sample's own period comes first and the rest of a longer interval is bridged with the
+    /// mean of `gyr` and `far` (the recorded time's bridge, inverted); without it the bridge
+    /// is the mean of the last and this rate and comes first. Returns the increment, the
+    /// bias-corrected rate, the time the sample covered and whether the rate was held.
+    fn increment(
+        &self,
+        dt: f64,
+        b: &[f64; 3],
         h: f64,
         gyr: Option<&[f64; 3]>,
-    ) -> Turn {
-        let dt = p.sample_time;
+        far: Option<&[f64; 3]>,
+    ) -> ([f64; 4], [f64; 3], f64, bool) {
         // A sample covers one nominal period; the rest of a longer interval (dropped samples)
         // is bridged with the mean of the last and this rate, a missing sample with the last
         // rate (module `timing`).
-        let b = bias.b;
         let (omega, bridged, held) = match gyr {
             Some(g) => {
                 let omega = [g[0] - b[0], g[1] - b[1], g[2] - b[2]];
                 if h > 1.5 * dt {
-                    let bridge = self.hold.bridge(&omega);
+                    let bridge = match far {
+                        Some(f) if f.iter().all(|x| x.is_finite()) => {
+                            std::array::from_fn(|j| 0.5 * (omega[j] + (f[j] - b[j])))
+                        }
+                        Some(_) => omega,
+                        None => self.hold.bridge(&omega),
+                    };
                     (omega, Some((bridge, h - dt)), false)
                 } else {
                     (omega, None, false)
@@ -92,11 +97,53 @@ impl Gyro {
             (true, None) => h,
         };
         let w = scale3(&omega, if held { h } else { covered });
-        let rate = norm3(&omega);
         let mut dq = q4::from_rotation_vector(&w);
         if let Some((bridge, u)) = bridged {
-            dq = q4::mul(&q4::from_rotation_vector(&scale3(&bridge, u)), &dq);
+            let r = q4::from_rotation_vector(&scale3(&bridge, u));
+            // recorded time: the bridge, then the sample's own period; reversed: the
+            // sample's own period (the last of the interval in recorded time) first
+            dq = if far.is_some() {
+                q4::mul(&dq, &r)
+            } else {
+                q4::mul(&r, &dq)
+            };
         }
+        (dq, omega, covered, held)
+    }
+
+    /// The increment [`Gyro::step`] would turn the state by for the same arguments, without
+    /// changing anything (the smoother's backward prediction, module `smoother`).
+    pub(super) fn preview(
+        &self,
+        p: &AhrsParams,
+        b: &[f64; 3],
+        h: f64,
+        gyr: Option<&[f64; 3]>,
+        far: Option<&[f64; 3]>,
+    ) -> [f64; 4] {
+        self.increment(p.sample_time, b, h, gyr, far).0
+    }
+
+    /// One sample `h` seconds after the previous one (step 2), `gyr` (rad/s; `None`: a gap,
+    /// `missing` seconds since the last sample before this one; `far`: see
+    /// [`Gyro::increment`]): turns `core`, accumulates the process noise and predicts the bias
+    /// (`bias`; its random walk held over a rest of `rest`).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn step(
+        &mut self,
+        p: &AhrsParams,
+        core: &mut Core<4>,
+        bias: &mut BiasState,
+        rest: &mut Rest,
+        missing: f64,
+        h: f64,
+        gyr: Option<&[f64; 3]>,
+        far: Option<&[f64; 3]>,
+    ) -> Turn {
+        let dt = p.sample_time;
+        let b = bias.b;
+        let (dq, omega, covered, held) = self.increment(dt, &[b[0], b[1], b[2]], h, gyr, far);
+        let rate = norm3(&omega);
         core.rotate(&dq);
         // The carried rate's error grows with the whole stretch without a gyroscope sample, not
         // sample by sample: add what this step adds to the stretch's variance.
@@ -155,6 +202,43 @@ impl Gyro {
             w_lead,
             rate,
             gap_ended,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Over dropped samples the reversed increment (the inverted rate of the sample after the
+    /// interval, `far` the inverted rate of the sample before it) is the exact inverse of the
+    /// recorded time's increment: the smoother's backward pass retraces the forward turn.
+    #[test]
+    fn the_reversed_bridge_inverts_the_forward_one() {
+        let dt = 0.01;
+        let b = [0.01, -0.02, 0.005];
+        let before = [0.7, -1.3, 2.1];
+        let after = [1.9, 0.4, -0.8];
+        let next = [-2.0, 1.0, 3.0];
+        for h in [dt, 1.2 * dt, 2.0 * dt, 5.0 * dt] {
+            // recorded time: the last rate is `before`, then the sample `after` h later
+            let mut fwd = Gyro::default();
+            fwd.hold
+                .push(&std::array::from_fn(|j| before[j] - b[j]), dt);
+            let (dq_f, ..) = fwd.increment(dt, &b, h, Some(&after), None);
+            // reversed time: the last rate is the inverted `next` (the sample after `after`),
+            // then the inverted `after` with `before` on the far side, inverted, bias
+            // negated (the backward pass's rates are `b − gyr`)
+            let inv = |v: &[f64; 3]| -> [f64; 3] { std::array::from_fn(|j| -v[j]) };
+            let mut back = Gyro::default();
+            back.hold.push(&inv(&next), dt);
+            let (dq_b, ..) =
+                back.increment(dt, &inv(&b), h, Some(&inv(&after)), Some(&inv(&before)));
+            let id = q4::mul(&dq_f, &dq_b);
+            assert!(
+                (id[0].abs() - 1.0).abs() < 1e-15 && id[1..].iter().all(|x| x.abs() < 1e-15),
+                "h = {h}: {id:?}"
+            );
         }
     }
 }

@@ -438,9 +438,53 @@ impl Ahrs {
         acc: &[f64; 3],
         mag: Option<&[f64; 3]>,
     ) -> Result<()> {
-        self.step_dt(dt, gyr, acc, mag)?;
+        self.step_dt(dt, gyr, acc, mag, None)?;
         self.last_time = None;
         Ok(())
+    }
+
+    /// A sample of a pass over reversed time (module `smoother`): [`Ahrs::update_dt`] with
+    /// `gyr` the inverted rate of the recorded sample after this one, and `far` the inverted
+    /// rate of the recorded sample before the interval, with which the rest of a longer
+    /// interval is bridged after the sample's own period (module `gyro`).
+    pub(crate) fn update_reversed(
+        &mut self,
+        dt: f64,
+        gyr: &[f64; 3],
+        far: &[f64; 3],
+        acc: &[f64; 3],
+        mag: Option<&[f64; 3]>,
+    ) -> Result<()> {
+        self.step_dt(dt, gyr, acc, mag, Some(far))?;
+        self.last_time = None;
+        Ok(())
+    }
+
+    /// The mode [`Ahrs::update_reversed`] with these arguments turns the state to before its
+    /// correction: the current mode times the gyroscope's increment (the identity before the
+    /// first sample). Changes nothing.
+    pub(crate) fn reversed_prediction(&self, dt: f64, gyr: &[f64; 3], far: &[f64; 3]) -> [f64; 4] {
+        let q = self.quaternion();
+        if self.samples == 0 {
+            return q;
+        }
+        let gyr = gyr.iter().all(|x| x.is_finite()).then_some(gyr);
+        let b = self.gyro_bias();
+        let dq = self
+            .sample_state
+            .gyro
+            .preview(&self.params, &b, self.snap(dt), gyr, Some(far));
+        q4::mul(&q, &dq)
+    }
+
+    /// `dt` within [`SNAP`] of the nominal period is the nominal period.
+    fn snap(&self, dt: f64) -> f64 {
+        let nominal = self.params.sample_time;
+        if (dt - nominal).abs() <= SNAP * nominal {
+            nominal
+        } else {
+            dt
+        }
     }
 
     /// [`Ahrs::update_dt`] without forgetting a timed batch's last timestamp.
@@ -450,16 +494,12 @@ impl Ahrs {
         gyr: &[f64; 3],
         acc: &[f64; 3],
         mag: Option<&[f64; 3]>,
+        far: Option<&[f64; 3]>,
     ) -> Result<()> {
         // A step within a millionth of the nominal period is the nominal period: differences
         // of uniformly spaced timestamps carry rounding, which should not make every sample
         // take the path of an irregular one (nor be refused at the smallest period).
-        let nominal = self.params.sample_time;
-        let dt = if (dt - nominal).abs() <= SNAP * nominal {
-            nominal
-        } else {
-            dt
-        };
+        let dt = self.snap(dt);
         if !(MIN_SAMPLE_TIME..=MAX_STEP_TIME).contains(&dt) {
             return Err(Error::InvalidArgument(format!(
                 "the time step dt = {dt} s is not finite or outside {MIN_SAMPLE_TIME:e} to \
@@ -493,7 +533,7 @@ impl Ahrs {
         if self.params.mag_latency == LATENCY_ESTIMATE {
             c.mag_lead = self.latency.estimate().unwrap_or(0.0) / self.params.sample_time;
         }
-        match step(&self.params, &c, core, &mut s, dt, gyr, acc, mag) {
+        match step(&self.params, &c, core, &mut s, dt, gyr, far, acc, mag) {
             Ok((dq, mag_used)) => {
                 self.sample_state = s;
                 // the latency estimate works on the raw samples at the nominal period
@@ -689,7 +729,7 @@ impl Ahrs {
                             k,
                         ));
                     }
-                    self.step_dt(dt, &gyr[k], &acc[k], m)
+                    self.step_dt(dt, &gyr[k], &acc[k], m, None)
                         .map_err(|e| prefix(e, k))?;
                     self.last_time = Some(tk);
                 }
@@ -739,6 +779,7 @@ fn step(
     s: &mut SampleState,
     h: f64,
     gyr: Option<&[f64; 3]>,
+    far: Option<&[f64; 3]>,
     acc: Option<&[f64; 3]>,
     mag: Option<&[f64; 3]>,
 ) -> Result<([f64; 4], bool)> {
@@ -763,7 +804,7 @@ fn step(
     let gyr_missing = s.times.gyr_missing;
     let turn = s
         .gyro
-        .step(p, core, &mut s.bias, &mut s.rest, gyr_missing, h, gyr);
+        .step(p, core, &mut s.bias, &mut s.rest, gyr_missing, h, gyr, far);
     if let Some(turned) = turn.gap_ended {
         s.accel.after_gap(p, turned);
         s.mag.after_gap(p, turned);
