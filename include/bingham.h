@@ -484,7 +484,10 @@ typedef struct bingham_ahrs_params {
     double gravity;
     /**
      * Angular standard deviation (rad) of the low-passed field's heading as a measurement of
-     * the heading; worth `1/(mag_noise²·mag_tau)` rad⁻² of heading precision per second.
+     * the heading; worth `1/(mag_noise²·mag_tau)` rad⁻² of heading precision per second in a
+     * homogeneous field, divided by `1 + 2·V_h/mag_noise²` where the field's direction is
+     * measured to vary by `V_h` (rad²) as the sensor moves (the local field's deviation,
+     * correlated over `mag_tau`, is an error of the heading reference).
      */
     double mag_noise;
     /**

@@ -179,8 +179,11 @@ fn a_gyroscope_gap_is_carried_through_and_widens_the_spread() {
     assert!((b.health().gyr_missing_time - 0.3).abs() < 1e-9);
     b.update(&g[2030], &acc[2030], Some(&mag[2030])).unwrap();
     assert_eq!(b.health().gyr_missing_time, 0.0);
-    // five seconds later the spread is back to its level before the gap
-    assert!(sp[2600] < 1.5 * sp[1999], "{} vs {}", sp[2600], sp[1999]);
+    // and it comes back to its level before the gap: within 1.5× six seconds later, 1.2×
+    // ten seconds later (the tilt error the gap left shows in the field's dip for a while,
+    // which the heading evidence counts as the reference's error, module `magnetic`)
+    assert!(sp[2700] < 1.5 * sp[1999], "{} vs {}", sp[2700], sp[1999]);
+    assert!(sp[2999] < 1.2 * sp[1999], "{} vs {}", sp[2999], sp[1999]);
 }
 
 #[test]

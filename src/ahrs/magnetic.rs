@@ -36,6 +36,12 @@ use super::vec3::{dot3, norm3, UP};
 use crate::filter::Core;
 use crate::quaternion::q4;
 
+/// The heading reference's error taken as correlated over the heading average's `mag_tau`
+/// (module documentation of [`Magnetic::heading_evidence`]): an exponential autocorrelation
+/// `V_h·exp(−|t|/mag_tau)` has the spectral density `2·V_h·mag_tau` at zero frequency, twice
+/// that of white noise of the same variance averaged over `mag_tau`.
+const REFERENCE_CORRELATION: f64 = 2.0;
+
 /// Time (s) a field must pass the disturbance test without interruption to end a disturbed
 /// phase (VQF uses the same half second).
 pub(super) const RECOVER_TIME: f64 = 0.5;
@@ -274,9 +280,19 @@ impl Magnetic {
     /// The heading evidence of a correction (step 5.3 of the module `ahrs`) whose used samples
     /// covered `t_mag` seconds, with the prior's mode `q_prior`: the heading error `δ` of the
     /// average gives the heading-only observation `exp(−2κ_m e_z²)`, `e = q ⊗ q_m*`, `q_m` the
-    /// prior mode turned by `δ` about the vertical, `κ_m = T_mag/(mag_noise²·mag_tau)`; its
-    /// innovation `δ` (1 degree of freedom) has the variance `mag_noise²`. `None` without used
-    /// samples in the period or a heading error (disturbed, no reference, a vertical field).
+    /// prior mode turned by `δ` about the vertical, `κ_m = T_mag/(mag_noise²·mag_tau·w)`; its
+    /// innovation `δ` (1 degree of freedom) has the variance `mag_noise²·w`. `None` without
+    /// used samples in the period or a heading error (disturbed, no reference, a vertical
+    /// field).
+    ///
+    /// `w = 1 + 2·V_h/mag_noise²` ([`REFERENCE_CORRELATION`]) widens the evidence by the
+    /// heading reference's error: the local field deviates from the reference's direction by
+    /// the variance `V_h` ([`Magnetic::heading_reference_variance`]), and that deviation is
+    /// not white: it changes with the position, on the motion's time scale, and what changes
+    /// slower than the average's `mag_tau` passes into the heading whole. Taken as correlated
+    /// over `mag_tau` (exponentially), its spectral density at zero frequency is
+    /// `2·V_h·mag_tau`, which adds to the sensor noise's `mag_noise²·mag_tau` (the evidence
+    /// per second is the inverse of the sum). With a homogeneous field `V_h = 0` and `w = 1`.
     pub(super) fn heading_evidence(
         &self,
         p: &AhrsParams,
@@ -288,12 +304,14 @@ impl Magnetic {
         } else {
             None
         }?;
-        let kappa = t_mag / (p.mag_noise * p.mag_noise * p.mag_tau);
+        let white = p.mag_noise * p.mag_noise;
+        let widen = 1.0 + REFERENCE_CORRELATION * self.heading_reference_variance() / white;
+        let kappa = t_mag / (white * p.mag_tau * widen);
         let rz = [(0.5 * delta).cos(), 0.0, 0.0, (0.5 * delta).sin()];
         Some(Evidence {
             exponent: heading_exponent(&q4::mul(&rz, q_prior), kappa),
             innovation: Innovation::heading(&q4::rotate_inverse(q_prior, &UP), delta),
-            var: p.mag_noise * p.mag_noise,
+            var: white * widen,
         })
     }
 

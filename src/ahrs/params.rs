@@ -67,7 +67,10 @@ pub struct AhrsParams {
     /// Magnitude of gravity in m/s².
     pub gravity: f64,
     /// Angular standard deviation (rad) of the low-passed field's heading as a measurement of
-    /// the heading; worth `1/(mag_noise²·mag_tau)` rad⁻² of heading precision per second.
+    /// the heading; worth `1/(mag_noise²·mag_tau)` rad⁻² of heading precision per second in a
+    /// homogeneous field, divided by `1 + 2·V_h/mag_noise²` where the field's direction is
+    /// measured to vary by `V_h` (rad²) as the sensor moves (the local field's deviation,
+    /// correlated over `mag_tau`, is an error of the heading reference).
     pub mag_noise: f64,
     /// Relative tolerance on the magnetic field's norm before a sample counts as disturbed.
     pub mag_norm_tol: f64,
