@@ -292,7 +292,10 @@ impl Magnetic {
     /// slower than the average's `mag_tau` passes into the heading whole. Taken as correlated
     /// over `mag_tau` (exponentially), its spectral density at zero frequency is
     /// `2·V_h·mag_tau`, which adds to the sensor noise's `mag_noise²·mag_tau` (the evidence
-    /// per second is the inverse of the sum). With a homogeneous field `V_h = 0` and `w = 1`.
+    /// per second is the inverse of the sum). The dip is measured against the state's "up", so
+    /// `V_h` also holds the state's own tilt error, which the heading evidence inherits as well
+    /// (a tilt error about north turns the averaged field's heading by `tan(dip)` times it).
+    /// With a homogeneous field and a settled tilt `V_h ≈ 0` and `w ≈ 1`.
     pub(super) fn heading_evidence(
         &self,
         p: &AhrsParams,
