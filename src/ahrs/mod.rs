@@ -487,15 +487,24 @@ impl Ahrs {
             .as_mut()
             .ok_or_else(|| Error::Numerical("AHRS without a state after its first sample".into()))?
             .core4_mut()?;
+        // the sample works on the state in place; a refused sample puts these copies back
         let saved = core.save();
-        let mut s = self.sample_state.clone();
+        let saved_state = self.sample_state.clone();
         let mut c = self.coeffs;
         if self.params.mag_latency == LATENCY_ESTIMATE {
             c.mag_lead = self.latency.estimate().unwrap_or(0.0) / self.params.sample_time;
         }
-        match step(&self.params, &c, core, &mut s, dt, gyr, acc, mag) {
+        match step(
+            &self.params,
+            &c,
+            core,
+            &mut self.sample_state,
+            dt,
+            gyr,
+            acc,
+            mag,
+        ) {
             Ok((dq, mag_used)) => {
-                self.sample_state = s;
                 // the latency estimate works on the raw samples at the nominal period
                 // (infallible, after the rest); a sample off the period is not one of them
                 if gyr.is_some()
@@ -508,6 +517,7 @@ impl Ahrs {
             }
             Err(e) => {
                 core.restore(saved);
+                self.sample_state = saved_state;
                 Err(e)
             }
         }
