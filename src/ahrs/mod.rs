@@ -296,7 +296,7 @@ impl Ahrs {
     /// orientation's spread.
     pub fn orientation_covariance(&self) -> Result<[f64; 9]> {
         let world = match self.stated_covariance()? {
-            Some((c, _)) => c,
+            Some(c) => c,
             // the uniform distribution: ω_i = 1/4
             None => Matrix3::identity(),
         };
@@ -309,9 +309,9 @@ impl Ahrs {
         Ok(out)
     }
 
-    /// The stated covariance (world frame) and its variances along the state's principal
-    /// directions (module `uncertainty`); `None` before the first sample.
-    fn stated_covariance(&self) -> Result<Option<(Matrix3<f64>, [f64; 3])>> {
+    /// The stated covariance (world frame, module `uncertainty`); `None` before the first
+    /// sample.
+    fn stated_covariance(&self) -> Result<Option<Matrix3<f64>>> {
         let Some(f) = &self.filter else {
             return Ok(None);
         };
@@ -320,10 +320,11 @@ impl Ahrs {
         let q = core.mode();
         let r = q4::to_matrix(&q);
         let r = Matrix3::from_fn(|i, j| r[i][j]);
-        let dirs = bias::principal_directions(m, &q).map(|u| r * u);
+        let dirs = bias::principal_directions(m, &q);
         // the pending noise made positive semi-definite, as the next correction takes it
-        let pending = r * bias::psd(&self.sample_state.bias.pending) * r.transpose();
+        let pending = bias::psd(&self.sample_state.bias.pending);
         Ok(Some(uncertainty::stated(
+            &r,
             &dirs,
             &pending,
             &self.stated_parts(),
