@@ -635,6 +635,8 @@ fn backward_pass(
     // stated bias variance still starts at bias_std² (conservative: nothing counted twice)
     let b_end = handoff.bias;
     let mut back = Ahrs::new(&bp)?;
+    // its own latency estimate is not used (`mag_latency` 0) and not read
+    back.without_latency_estimate();
     match &handoff.state {
         // without a magnetometer the heading's convention is the forward pass's start: carry
         // it over

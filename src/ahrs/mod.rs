@@ -142,6 +142,8 @@ pub struct Ahrs {
     sample_state: SampleState,
     /// The online estimate of the magnetometer's latency (a readout; not used by the filter).
     latency: LatencyEstimator,
+    /// Whether the latency estimate is kept (see [`Ahrs::without_latency_estimate`]).
+    estimate_latency: bool,
     samples: u64,
     /// The timestamp (s) of the last sample of a timed batch ([`Ahrs::update_batch_timed`]).
     last_time: Option<f64>,
@@ -159,6 +161,7 @@ impl Ahrs {
             filter: None,
             sample_state: SampleState::new(params, &coeffs),
             latency: LatencyEstimator::new(params.sample_time),
+            estimate_latency: true,
             samples: 0,
             last_time: None,
         })
@@ -403,6 +406,16 @@ impl Ahrs {
         self.latency.estimate()
     }
 
+    /// Stops the latency estimate (from the next sample on; [`Ahrs::mag_latency_estimate`]
+    /// then stays what it was), for an AHRS whose estimate nobody reads and whose
+    /// `mag_latency` is not [`LATENCY_ESTIMATE`], so that the filter does not use it either:
+    /// every other output is the same bit for bit. Crate-internal: the offline smoother's
+    /// backward pass (`crate::smoother`), whose magnetometer samples are shifted by the forward
+    /// pass's estimate instead.
+    pub(crate) fn without_latency_estimate(&mut self) {
+        self.estimate_latency = false;
+    }
+
     /// The latency estimate, or an [`Error::NotConverged`] saying why there is none.
     pub(crate) fn mag_latency_estimate_or_error(&self) -> Result<f64> {
         self.latency
@@ -508,7 +521,8 @@ impl Ahrs {
             Ok((dq, mag_used)) => {
                 // the latency estimate works on the raw samples at the nominal period
                 // (infallible, after the rest); a sample off the period is not one of them
-                if gyr.is_some()
+                if self.estimate_latency
+                    && gyr.is_some()
                     && (dt - self.params.sample_time).abs() <= 0.5 * self.params.sample_time
                 {
                     self.latency.push(&dq, if mag_used { mag } else { None });
