@@ -44,9 +44,12 @@
 //! forward pass's values after [`HANDOFF_TIME`] (30 s) of the recording or, when the latency
 //! is the forward pass's estimate (the default), after the first whole second from then on at
 //! which that estimate exists. From the handoff on the two passes run concurrently, the
-//! backward one on a second thread, and the product is formed afterwards, its two halves on
-//! two threads: a call uses at most two threads (the caller's and one it starts and joins
-//! before it returns). The handoff is a function of the recording alone (its length, sample
+//! backward one on a second thread, which hands its states over in chunks of 4096 samples; the
+//! forward pass's thread, which ends first (its pass started earlier), forms the product at
+//! each chunk while the backward pass goes on. Passes run in turn form the product afterwards,
+//! its two halves on two threads. A call uses at most two threads (the caller's and one it
+//! starts and joins before it returns). The product at a sample is a function of the two
+//! passes' states there alone, and the handoff is a function of the recording alone (its length, sample
 //! time and samples), never of the scheduling: the result is the same bit for bit whether the
 //! second thread runs, is slow, or cannot be started (then one thread does both, in turn).
 //! Recordings of at most [`HANDOFF_TIME`] + [`PARALLEL_TIME`], recordings without a
@@ -610,20 +613,23 @@ fn forward_pass(
 }
 
 /// The backward pass (module documentation) from the forward pass's handoff: its predicted
-/// state at every sample `k < start` into `store` (index `start − 1 − k`), `start` the sample
-/// it starts at (the last with a usable accelerometer), which it returns. Stops (returning
-/// `Ok(0)`) when `abort` is set.
+/// state at every sample `k < start`, `start` the sample it starts at (the last with a usable
+/// accelerometer), which it returns, handed to `emit` in [`Chunk`]s of [`CHUNK`] samples (the
+/// last one shorter), from the highest samples down. Stops (returning `Ok(0)`) when `abort` is
+/// set.
 fn backward_pass(
     params: &AhrsParams,
     options: &SmoothOptions,
     input: &SmoothInput<'_>,
     handoff: &Handoff,
-    store: &mut Pass,
+    want_bias: bool,
     abort: &AtomicBool,
+    mut emit: impl FnMut(Chunk),
 ) -> Result<usize> {
     let n = input.gyr.len();
     let nominal = params.sample_time;
     let exact = options.fusion == Fusion::Bingham;
+    let mut store = Pass::new(CHUNK.min(n), want_bias, exact)?;
     // the backward pass's magnetometer: the forward's latency as a shift of the samples
     let mag_shift = handoff.mag_latency / nominal;
     let acc_shift = params.acc_latency / nominal;
@@ -695,6 +701,13 @@ fn backward_pass(
                 bs.push(ForwardBias {
                     b: bb.map(|x| x as f32),
                     p: pack9(&back.gyro_bias_covariance()),
+                });
+            }
+            if store.states.len() == CHUNK || k == 0 {
+                let next = Pass::new(CHUNK.min(k), want_bias, exact)?;
+                emit(Chunk {
+                    lo: k,
+                    pass: std::mem::replace(&mut store, next),
                 });
             }
         }
@@ -780,8 +793,21 @@ fn product(
     }
 }
 
-/// The number of samples from which the product runs on two threads.
+/// The number of samples from which the product runs on two threads when the passes ran one
+/// after the other.
 const PARALLEL_PRODUCT: usize = 1 << 14;
+
+/// The samples per [`Chunk`] of the backward pass.
+const CHUNK: usize = 4096;
+
+/// A run of consecutive samples of the backward pass: its predicted states (and bias,
+/// exponents) of the samples `lo … lo + len − 1`, stored from the highest down. The backward
+/// pass hands them over as it goes, so that with the passes concurrent the forward pass's
+/// thread forms the product of each while the backward pass goes on.
+struct Chunk {
+    lo: usize,
+    pass: Pass,
+}
 
 /// A run of samples for the product: the forward states (and bias, exponents) in order, the
 /// backward predictions of the same samples stored in reverse (`back[len − 1 − i]` for
@@ -811,10 +837,73 @@ impl Half<'_> {
     }
 }
 
+/// The forward pass's states (and exponents, bias) of the samples from `offset` on.
+struct Span<'a> {
+    offset: usize,
+    states: &'a mut [Forward],
+    exponents: &'a [Matrix4<f64>],
+    bias: Option<&'a mut [ForwardBias]>,
+}
+
+impl Span<'_> {
+    /// The product at the samples of `chunk` (within the span).
+    fn apply(&mut self, options: &SmoothOptions, chunk: &Chunk) {
+        let len = chunk.pass.states.len();
+        let r = chunk.lo - self.offset..chunk.lo - self.offset + len;
+        Half {
+            states: &mut self.states[r.clone()],
+            exponents: if self.exponents.is_empty() {
+                &[]
+            } else {
+                &self.exponents[r.clone()]
+            },
+            bias: self.bias.as_deref_mut().map(|b| &mut b[r]),
+            back: &chunk.pass.states,
+            back_exponents: &chunk.pass.exponents,
+            back_bias: chunk.pass.bias.as_deref(),
+        }
+        .apply(options);
+    }
+}
+
+/// The span of `fwd`'s samples below `at` and that from `at` on.
+fn split_at(fwd: &mut Pass, at: usize) -> (Span<'_>, Span<'_>) {
+    let (s_lo, s_hi) = fwd.states.split_at_mut(at);
+    let (e_lo, e_hi) = if fwd.exponents.is_empty() {
+        (&[][..], &[][..])
+    } else {
+        fwd.exponents.split_at(at)
+    };
+    let (b_lo, b_hi) = match fwd.bias.as_mut() {
+        Some(b) => {
+            let (l, h) = b.split_at_mut(at);
+            (Some(l), Some(h))
+        }
+        None => (None, None),
+    };
+    (
+        Span {
+            offset: 0,
+            states: s_lo,
+            exponents: e_lo,
+            bias: b_lo,
+        },
+        Span {
+            offset: at,
+            states: s_hi,
+            exponents: e_hi,
+            bias: b_hi,
+        },
+    )
+}
+
 /// The forward and the backward pass and their product: the smoothed states (and bias).
 /// With [`handoff_index`] before the last sample the backward pass runs on a second thread
-/// from the handoff on (module documentation, "Threads"); one thread if it cannot be started,
-/// with the same result.
+/// from the handoff on (module documentation, "Threads"), and the forward pass's thread, once
+/// its pass is done, forms the product at the backward pass's chunks as they come; one thread
+/// if the second cannot be started, with the same result (the product at a sample is a
+/// function of the two passes' states there alone). Passes run one after the other form the
+/// product afterwards, on two threads from [`PARALLEL_PRODUCT`] samples on.
 fn run(
     params: &AhrsParams,
     options: &SmoothOptions,
@@ -829,25 +918,29 @@ fn run(
         .is_some_and(|m| m.iter().any(|r| usable(r) && r.iter().any(|x| *x != 0.0)));
     let at = handoff_index(n, params.sample_time, has_mag);
     let mut fwd = Pass::new(n, want_bias, exact)?;
-    let mut back = Pass::new(n.saturating_sub(1), want_bias, exact)?;
     let abort = AtomicBool::new(false);
     let mut handoff = None;
     let mut back_result = None;
     std::thread::scope(|s| -> Result<()> {
         let (tx, rx) = std::sync::mpsc::channel::<Handoff>();
-        let back_ref = &mut back;
+        let (chunk_tx, chunk_rx) = std::sync::mpsc::channel::<Chunk>();
         let abort_ref = &abort;
         let thread = if threads && at + 1 < n {
             std::thread::Builder::new()
                 .name("bingham-smooth".into())
                 .spawn_scoped(s, move || -> Option<Result<usize>> {
                     let h = rx.recv().ok()?;
+                    // a closed channel: the forward pass failed, and nobody waits for these
+                    let emit = |c: Chunk| {
+                        let _ = chunk_tx.send(c);
+                    };
                     Some(backward_pass(
-                        params, options, input, &h, back_ref, abort_ref,
+                        params, options, input, &h, want_bias, abort_ref, emit,
                     ))
                 })
                 .ok()
         } else {
+            drop(chunk_tx);
             None
         };
         let concurrent = thread.is_some();
@@ -861,6 +954,12 @@ fn run(
         drop(tx);
         if fres.is_err() {
             abort.store(true, Ordering::Relaxed);
+        } else if concurrent {
+            // the product at each chunk as the backward pass hands it over, until it ends
+            let (_, mut all) = split_at(&mut fwd, 0);
+            for chunk in chunk_rx.iter() {
+                all.apply(options, &chunk);
+            }
         }
         if let Some(t) = thread {
             back_result = Some(
@@ -875,71 +974,48 @@ fn run(
         }
         fres
     })?;
-    let start = match back_result {
-        Some(r) => r?,
-        None => {
-            let h = handoff.ok_or_else(|| {
-                Error::Numerical("the smoother's forward pass gave no handoff".into())
-            })?;
-            backward_pass(params, options, input, &h, &mut back, &abort)?
-        }
-    };
-    // the product at every sample the backward pass predicted, the two halves on two threads
-    let start = start.min(back.states.len()).min(n);
-    let (mid, rest) = (start / 2, start - start / 2);
-    let (f_lo, f_hi) = fwd.states[..start].split_at_mut(mid);
-    // the backward states are stored from sample start − 1 down: the upper half first
-    let (b_hi, b_lo) = back.states.split_at(rest);
-    let (e_lo, e_hi) = fwd.exponents.split_at(if exact { mid } else { 0 });
-    let (be_hi, be_lo) = back.exponents.split_at(if exact { rest } else { 0 });
-    let (fb_lo, fb_hi) = match fwd.bias.as_mut() {
-        Some(f) => {
-            let (a, b) = f.split_at_mut(mid);
-            (Some(a), Some(b))
-        }
-        None => (None, None),
-    };
-    let (bb_hi, bb_lo) = match back.bias.as_ref() {
-        Some(b) => {
-            let (h, l) = b.split_at(rest);
-            (Some(h), Some(l))
-        }
-        None => (None, None),
-    };
-    let lo = Half {
-        states: f_lo,
-        exponents: e_lo,
-        bias: fb_lo,
-        back: b_lo,
-        back_exponents: be_lo,
-        back_bias: bb_lo,
-    };
-    let hi = Half {
-        states: f_hi,
-        exponents: e_hi,
-        bias: fb_hi,
-        back: b_hi,
-        back_exponents: be_hi,
-        back_bias: bb_hi,
-    };
-    let hi = std::sync::Mutex::new(Some(hi));
-    let run_hi = || {
-        if let Some(h) = hi.lock().ok().and_then(|mut h| h.take()) {
-            h.apply(options);
-        }
-    };
-    if threads && start >= PARALLEL_PRODUCT {
+    if let Some(r) = back_result {
+        r?;
+        return Ok((fwd.states, fwd.bias));
+    }
+    // the passes one after the other: the backward pass's chunks kept, then the product
+    let h = handoff
+        .ok_or_else(|| Error::Numerical("the smoother's forward pass gave no handoff".into()))?;
+    let mut chunks = Vec::new();
+    backward_pass(params, options, input, &h, want_bias, &abort, |c| {
+        chunks.push(c)
+    })?;
+    let total: usize = chunks.iter().map(|c| c.pass.states.len()).sum();
+    // the chunks descend: the first half of them (the upper samples) on a second thread
+    let half = chunks.len() / 2;
+    if threads && total >= PARALLEL_PRODUCT && half > 0 {
+        let mid = chunks[half - 1].lo;
+        let (upper, lower) = chunks.split_at(half);
+        let (mut lo, hi) = split_at(&mut fwd, mid);
+        let hi = std::sync::Mutex::new(Some(hi));
+        let run_hi = || {
+            if let Some(mut h) = hi.lock().ok().and_then(|mut h| h.take()) {
+                for c in upper {
+                    h.apply(options, c);
+                }
+            }
+        };
         std::thread::scope(|s| {
             // no thread: the half is left for this one
             let _ = std::thread::Builder::new()
                 .name("bingham-smooth".into())
                 .spawn_scoped(s, run_hi);
-            lo.apply(options);
+            for c in lower {
+                lo.apply(options, c);
+            }
         });
+        run_hi();
     } else {
-        lo.apply(options);
+        let (_, mut all) = split_at(&mut fwd, 0);
+        for c in &chunks {
+            all.apply(options, c);
+        }
     }
-    run_hi();
     Ok((fwd.states, fwd.bias))
 }
 
@@ -1025,8 +1101,10 @@ mod tests {
     }
 
     /// The passes on two threads give the result of one thread bit for bit (the handoff and
-    /// the product's halves are functions of the recording alone), with the bias and the exact
-    /// product, on a recording long enough for both to be concurrent.
+    /// the product at each sample are functions of the recording alone), with the bias and the
+    /// exact product, on a recording long enough for both to be concurrent (the product formed
+    /// chunk by chunk as the backward pass goes), and on one without a magnetometer (the passes
+    /// in turn, the product's halves on two threads).
     #[test]
     fn two_threads_give_the_result_of_one() {
         let mut rng = Rng(7);
@@ -1084,6 +1162,28 @@ mod tests {
                 assert_eq!(b1[k].b, b2[k].b, "sample {k}");
                 assert_eq!(b1[k].p, b2[k].p, "sample {k}");
             }
+        }
+        // without the magnetometer the passes run in turn, and over PARALLEL_PRODUCT samples
+        // the product's two halves (of the backward pass's chunks) on two threads
+        let long = 3 * n;
+        let (gyr2, acc2): (Vec<_>, Vec<_>) = (0..long).map(|k| (gyr[k % n], acc[k % n])).unzip();
+        let input = SmoothInput {
+            time: None,
+            gyr: &gyr2,
+            acc: &acc2,
+            mag: None,
+        };
+        let params = AhrsParams::new(dt);
+        let options = SmoothOptions::default();
+        assert!(long > PARALLEL_PRODUCT + CHUNK);
+        let (f1, b1) = run(&params, &options, &input, true, false).unwrap();
+        let (f2, b2) = run(&params, &options, &input, true, true).unwrap();
+        let (b1, b2) = (b1.unwrap(), b2.unwrap());
+        for k in 0..long {
+            assert_eq!(f1[k].q, f2[k].q, "sample {k}");
+            assert_eq!(f1[k].c, f2[k].c, "sample {k}");
+            assert_eq!(b1[k].b, b2[k].b, "sample {k}");
+            assert_eq!(b1[k].p, b2[k].p, "sample {k}");
         }
     }
 
