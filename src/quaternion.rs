@@ -43,52 +43,6 @@ fn assert_dim(n: usize) {
     assert!(n == 2 || n == 4, "products exist for d = 2 and 4");
 }
 
-/// The signs of the terms of [`compose4`]: `s_{i,i⊻x} s_{j,j⊻y}` at `[i][j][x][y]`.
-const COMPOSE_SIGN4: [[[[f64; 4]; 4]; 4]; 4] = {
-    let mut t = [[[[0.0; 4]; 4]; 4]; 4];
-    let mut i = 0;
-    while i < 4 {
-        let mut j = 0;
-        while j < 4 {
-            let mut x = 0;
-            while x < 4 {
-                let mut y = 0;
-                while y < 4 {
-                    t[i][j][x][y] = SIGN4[i][i ^ x] * SIGN4[j][j ^ y];
-                    y += 1;
-                }
-                x += 1;
-            }
-            j += 1;
-        }
-        i += 1;
-    }
-    t
-};
-
-/// The d = 4 case of [`compose_moments`] before the symmetrization, on column-major 4×4
-/// slices, with the signs from a table and the loops unrolled: the same terms added in the same
-/// order (a term `a·s_x·s_y·b` with signs ±1 is `±(a·b)` exactly), so the same bits.
-#[inline(always)]
-fn compose4(a: &[f64], b: &[f64], c: &mut [f64]) {
-    let a: [[f64; 4]; 4] = std::array::from_fn(|col| std::array::from_fn(|r| a[4 * col + r]));
-    let b: [[f64; 4]; 4] = std::array::from_fn(|col| std::array::from_fn(|r| b[4 * col + r]));
-    for i in 0..4 {
-        for j in 0..4 {
-            let sg = &COMPOSE_SIGN4[i][j];
-            let mut t = 0.0;
-            for x in 0..4 {
-                let ix = i ^ x;
-                for y in 0..4 {
-                    // a[(x, y)] is a[y][x] (column y); b[(ix, jy)] is b[jy][ix]
-                    t += sg[x][y] * (a[y][x] * b[j ^ y][ix]);
-                }
-            }
-            c[4 * j + i] = t;
-        }
-    }
-}
-
 /// `L(x)`, with `x ⊕ y = L(x) y` (`x` of length 2 or 4).
 pub(crate) fn left<D: Dim>(d: D, x: &[f64]) -> Square<D>
 where
@@ -119,10 +73,6 @@ where
     let n = d.value();
     assert_dim(n);
     let mut c = zeros(d);
-    if n == 4 {
-        compose4(a.as_slice(), b.as_slice(), c.as_mut_slice());
-        return symmetrize(&c);
-    }
     for i in 0..n {
         for j in 0..n {
             let mut t = 0.0;
@@ -410,46 +360,5 @@ mod tests {
     fn composition_of_moments_is_the_moment_of_the_composition() {
         composed_moment::<2>();
         composed_moment::<4>();
-    }
-
-    /// The d = 4 path of `compose_moments` against the general loop it replaced, bit for bit
-    /// (signed zeros included), on random symmetric and non-symmetric matrices of mixed scales.
-    #[test]
-    fn d4_composition_is_the_general_loop_bit_for_bit() {
-        let mut r = xorshift(23);
-        for k in 0..200 {
-            let scale = |r: &mut dyn FnMut() -> f64| {
-                let e = (r() * 40.0).round();
-                2f64.powf(e)
-            };
-            let mut a = SMatrix::<f64, 4, 4>::from_fn(|_, _| r() * scale(&mut r));
-            let b = SMatrix::<f64, 4, 4>::from_fn(|_, _| r() * scale(&mut r));
-            if k % 2 == 0 {
-                a = a + a.transpose();
-            }
-            if k % 5 == 0 {
-                a[(1, 2)] = -0.0;
-                a[(0, 0)] = 0.0;
-            }
-            let mut expect = SMatrix::<f64, 4, 4>::zeros();
-            for i in 0..4 {
-                for j in 0..4 {
-                    let mut t = 0.0;
-                    for x in 0..4 {
-                        let (ix, sx) = (i ^ x, sign(4, i, i ^ x));
-                        for y in 0..4 {
-                            let jy = j ^ y;
-                            t += a[(x, y)] * sx * sign(4, j, jy) * b[(ix, jy)];
-                        }
-                    }
-                    expect[(i, j)] = t;
-                }
-            }
-            let expect = symmetrize(&expect);
-            let c = compose_moments(&a, &b);
-            for (x, y) in c.iter().zip(expect.iter()) {
-                assert_eq!(x.to_bits(), y.to_bits(), "case {k}");
-            }
-        }
     }
 }
