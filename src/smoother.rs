@@ -49,9 +49,10 @@
 //! each chunk while the backward pass goes on. Passes run in turn form the product afterwards,
 //! its two halves on two threads. A call uses at most two threads (the caller's and one it
 //! starts and joins before it returns). The product at a sample is a function of the two
-//! passes' states there alone, and the handoff is a function of the recording alone (its length, sample
-//! time and samples), never of the scheduling: the result is the same bit for bit whether the
-//! second thread runs, is slow, or cannot be started (then one thread does both, in turn).
+//! passes' states there alone, and the handoff is a function of the recording alone (its
+//! length, sample time and samples), never of the scheduling: the result is the same bit for
+//! bit whether the second thread runs, is slow, or cannot be started (then one thread does
+//! both, in turn).
 //! Recordings of at most [`HANDOFF_TIME`] + [`PARALLEL_TIME`], recordings without a
 //! magnetometer (whose backward pass starts from the forward pass's final state) and those in
 //! which the forward pass has no latency estimate before its end take the forward pass's
