@@ -44,11 +44,15 @@
 //! forward pass's values after [`HANDOFF_TIME`] (30 s) of the recording or, when the latency
 //! is the forward pass's estimate (the default), after the first whole second from then on at
 //! which that estimate exists. From the handoff on the two passes run concurrently, the
-//! backward one on a second thread, and the product is formed afterwards, its two halves on
-//! two threads: a call uses at most two threads (the caller's and one it starts and joins
-//! before it returns). The handoff is a function of the recording alone (its length, sample
-//! time and samples), never of the scheduling: the result is the same bit for bit whether the
-//! second thread runs, is slow, or cannot be started (then one thread does both, in turn).
+//! backward one on a second thread, which hands its states over in chunks of 4096 samples; the
+//! forward pass's thread, which ends first (its pass started earlier), forms the product at
+//! each chunk while the backward pass goes on. Passes run in turn form the product afterwards,
+//! its two halves on two threads. A call uses at most two threads (the caller's and one it
+//! starts and joins before it returns). The product at a sample is a function of the two
+//! passes' states there alone, and the handoff is a function of the recording alone (its
+//! length, sample time and samples), never of the scheduling: the result is the same bit for
+//! bit whether the second thread runs, is slow, or cannot be started (then one thread does
+//! both, in turn).
 //! Recordings of at most [`HANDOFF_TIME`] + [`PARALLEL_TIME`], recordings without a
 //! magnetometer (whose backward pass starts from the forward pass's final state) and those in
 //! which the forward pass has no latency estimate before its end take the forward pass's
@@ -61,7 +65,7 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use nalgebra::{Cholesky, Matrix3, Matrix4, Vector3, Vector4, U3};
+use nalgebra::{Matrix3, Matrix4, Vector3, Vector4};
 
 use crate::ahrs::{Ahrs, AhrsParams, LATENCY_ESTIMATE};
 use crate::error::{Error, Result};
@@ -222,28 +226,60 @@ fn prefix(e: Error, what: &str) -> Error {
     }
 }
 
+/// The Cholesky factor `L` (lower, `S = L Lᵀ`) of a symmetric 3×3 `S` (its lower triangle
+/// read), packed as `[l00, l10, l11, l20, l21, l22]`; `None` unless `S` is positive definite
+/// (a pivot zero, negative or NaN).
+fn cholesky3(s: &Matrix3<f64>) -> Option<[f64; 6]> {
+    let pivot = |d: f64| (d > 0.0).then(|| d.sqrt());
+    let l00 = pivot(s[(0, 0)])?;
+    let l10 = s[(1, 0)] / l00;
+    let l20 = s[(2, 0)] / l00;
+    let l11 = pivot(s[(1, 1)] - l10 * l10)?;
+    let l21 = (s[(2, 1)] - l20 * l10) / l11;
+    let l22 = pivot(s[(2, 2)] - l20 * l20 - l21 * l21)?;
+    Some([l00, l10, l11, l20, l21, l22])
+}
+
+/// `L⁻¹ b` for the packed factor `l` of [`cholesky3`] (forward substitution).
+fn forward3(l: &[f64; 6], b: &Vector3<f64>) -> Vector3<f64> {
+    let y0 = b.x / l[0];
+    let y1 = (b.y - l[1] * y0) / l[2];
+    let y2 = (b.z - l[3] * y0 - l[4] * y1) / l[5];
+    Vector3::new(y0, y1, y2)
+}
+
 /// The fusion of two Gaussian estimates `(x_f, C_f)`, `(x_f + δ, C_b)`: the shift from `x_f`
 /// and the fused covariance, `C_f (C_f + C_b)⁻¹ δ` and `C_f − C_f (C_f + C_b)⁻¹ C_f`. `None`
-/// when `C_f + C_b` is singular or not finite.
+/// when `C_f + C_b` is not positive definite or the result not finite.
 fn fuse(
     cf: &Matrix3<f64>,
     cb: &Matrix3<f64>,
     delta: &Vector3<f64>,
 ) -> Option<(Vector3<f64>, Matrix3<f64>)> {
-    fuse_with(&(cf + cb).cholesky()?, cf, delta)
+    let l = cholesky3(&(cf + cb))?;
+    fuse_with(&l, cf, &forward3(&l, delta))
 }
 
-/// [`fuse`] with the Cholesky factor of `C_f + C_b` given.
+/// [`fuse`] with the Cholesky factor `l` of `S = C_f + C_b` ([`cholesky3`]) and `y = L⁻¹ δ`
+/// given: with `W = L⁻¹ C_f`, the shift `C_f S⁻¹ δ = Wᵀ y` and the covariance
+/// `C_f − C_f S⁻¹ C_f = C_f − Wᵀ W` (symmetric by construction; forward substitutions only).
 fn fuse_with(
-    chol: &Cholesky<f64, U3>,
+    l: &[f64; 6],
     cf: &Matrix3<f64>,
-    delta: &Vector3<f64>,
+    y: &Vector3<f64>,
 ) -> Option<(Vector3<f64>, Matrix3<f64>)> {
-    // K = C_f S⁻¹ (S, C_f symmetric): Kᵀ = S⁻¹ C_f
-    let kt = chol.solve(cf);
-    let shift = kt.transpose() * delta;
-    let cs = cf - kt.transpose() * cf;
-    let cs = 0.5 * (cs + cs.transpose());
+    let w = Matrix3::from_columns(&[
+        forward3(l, &cf.column(0).into_owned()),
+        forward3(l, &cf.column(1).into_owned()),
+        forward3(l, &cf.column(2).into_owned()),
+    ]);
+    let shift = w.tr_mul(y);
+    let ww = w.tr_mul(&w);
+    // C_f's symmetric part (the stored covariances are symmetric) minus WᵀW, mirrored
+    let cs = Matrix3::from_fn(|i, j| {
+        let (i, j) = if i <= j { (i, j) } else { (j, i) };
+        0.5 * (cf[(i, j)] + cf[(j, i)]) - ww[(i, j)]
+    });
     (shift.iter().all(|x| x.is_finite()) && cs.iter().all(|x| x.is_finite())).then_some((shift, cs))
 }
 
@@ -578,20 +614,23 @@ fn forward_pass(
 }
 
 /// The backward pass (module documentation) from the forward pass's handoff: its predicted
-/// state at every sample `k < start` into `store` (index `start − 1 − k`), `start` the sample
-/// it starts at (the last with a usable accelerometer), which it returns. Stops (returning
-/// `Ok(0)`) when `abort` is set.
+/// state at every sample `k < start`, `start` the sample it starts at (the last with a usable
+/// accelerometer), which it returns, handed to `emit` in [`Chunk`]s of [`CHUNK`] samples (the
+/// last one shorter), from the highest samples down. Stops (returning `Ok(0)`) when `abort` is
+/// set.
 fn backward_pass(
     params: &AhrsParams,
     options: &SmoothOptions,
     input: &SmoothInput<'_>,
     handoff: &Handoff,
-    store: &mut Pass,
+    want_bias: bool,
     abort: &AtomicBool,
+    mut emit: impl FnMut(Chunk),
 ) -> Result<usize> {
     let n = input.gyr.len();
     let nominal = params.sample_time;
     let exact = options.fusion == Fusion::Bingham;
+    let mut store = Pass::new(CHUNK.min(n), want_bias, exact)?;
     // the backward pass's magnetometer: the forward's latency as a shift of the samples
     let mag_shift = handoff.mag_latency / nominal;
     let acc_shift = params.acc_latency / nominal;
@@ -603,6 +642,8 @@ fn backward_pass(
     // stated bias variance still starts at bias_std² (conservative: nothing counted twice)
     let b_end = handoff.bias;
     let mut back = Ahrs::new(&bp)?;
+    // its own latency estimate is not used (`mag_latency` 0) and not read
+    back.without_latency_estimate();
     match &handoff.state {
         // without a magnetometer the heading's convention is the forward pass's start: carry
         // it over
@@ -663,6 +704,13 @@ fn backward_pass(
                     p: pack9(&back.gyro_bias_covariance()),
                 });
             }
+            if store.states.len() == CHUNK || k == 0 {
+                let next = Pass::new(CHUNK.min(k), want_bias, exact)?;
+                emit(Chunk {
+                    lo: k,
+                    pass: std::mem::replace(&mut store, next),
+                });
+            }
         }
         let acc = shifted(input.acc, k, acc_shift);
         let mag = input.mag.map(|m| shifted(m, k, mag_shift));
@@ -703,20 +751,21 @@ fn product(
     let mut cb = unpack(&b.c);
     let d = q4::to_rotation_vector(&q4::mul(&b.q, &q4::conj(&qf)));
     let dv = Vector3::new(d[0], d[1], d[2]);
-    let mut chol = (cf + cb).cholesky();
+    // one Cholesky factor of C_f + C_b and L⁻¹δ serve the gate and the product
+    let mut chol = cholesky3(&(cf + cb)).map(|l| (l, forward3(&l, &dv)));
     // the consistency gate: a backward state farther from the forward one than their
     // covariances allow (a start, a magnetic reference taken in a disturbance) is widened
-    // until it is consistent
+    // until it is consistent (the squared Mahalanobis distance δᵀ(C_f + C_b)⁻¹δ = |L⁻¹δ|²)
     if options.gate > 0.0 {
-        if let Some(c) = &chol {
-            let m2 = dv.dot(&c.solve(&dv));
+        if let Some((_, y)) = &chol {
+            let m2 = y.norm_squared();
             if m2 > options.gate {
                 cb *= m2 / options.gate;
-                chol = (cf + cb).cholesky();
+                chol = cholesky3(&(cf + cb)).map(|l| (l, forward3(&l, &dv)));
             }
         }
     }
-    if let Some((shift, cs)) = chol.and_then(|c| fuse_with(&c, &cf, &dv)) {
+    if let Some((shift, cs)) = chol.and_then(|(l, y)| fuse_with(&l, &cf, &y)) {
         let q = match exps {
             Some((ef, eb)) => {
                 let a = ef + eb;
@@ -745,8 +794,21 @@ fn product(
     }
 }
 
-/// The number of samples from which the product runs on two threads.
+/// The number of samples from which the product runs on two threads when the passes ran one
+/// after the other.
 const PARALLEL_PRODUCT: usize = 1 << 14;
+
+/// The samples per [`Chunk`] of the backward pass.
+const CHUNK: usize = 4096;
+
+/// A run of consecutive samples of the backward pass: its predicted states (and bias,
+/// exponents) of the samples `lo … lo + len − 1`, stored from the highest down. The backward
+/// pass hands them over as it goes, so that with the passes concurrent the forward pass's
+/// thread forms the product of each while the backward pass goes on.
+struct Chunk {
+    lo: usize,
+    pass: Pass,
+}
 
 /// A run of samples for the product: the forward states (and bias, exponents) in order, the
 /// backward predictions of the same samples stored in reverse (`back[len − 1 − i]` for
@@ -776,10 +838,73 @@ impl Half<'_> {
     }
 }
 
+/// The forward pass's states (and exponents, bias) of the samples from `offset` on.
+struct Span<'a> {
+    offset: usize,
+    states: &'a mut [Forward],
+    exponents: &'a [Matrix4<f64>],
+    bias: Option<&'a mut [ForwardBias]>,
+}
+
+impl Span<'_> {
+    /// The product at the samples of `chunk` (within the span).
+    fn apply(&mut self, options: &SmoothOptions, chunk: &Chunk) {
+        let len = chunk.pass.states.len();
+        let r = chunk.lo - self.offset..chunk.lo - self.offset + len;
+        Half {
+            states: &mut self.states[r.clone()],
+            exponents: if self.exponents.is_empty() {
+                &[]
+            } else {
+                &self.exponents[r.clone()]
+            },
+            bias: self.bias.as_deref_mut().map(|b| &mut b[r]),
+            back: &chunk.pass.states,
+            back_exponents: &chunk.pass.exponents,
+            back_bias: chunk.pass.bias.as_deref(),
+        }
+        .apply(options);
+    }
+}
+
+/// The span of `fwd`'s samples below `at` and that from `at` on.
+fn split_at(fwd: &mut Pass, at: usize) -> (Span<'_>, Span<'_>) {
+    let (s_lo, s_hi) = fwd.states.split_at_mut(at);
+    let (e_lo, e_hi) = if fwd.exponents.is_empty() {
+        (&[][..], &[][..])
+    } else {
+        fwd.exponents.split_at(at)
+    };
+    let (b_lo, b_hi) = match fwd.bias.as_mut() {
+        Some(b) => {
+            let (l, h) = b.split_at_mut(at);
+            (Some(l), Some(h))
+        }
+        None => (None, None),
+    };
+    (
+        Span {
+            offset: 0,
+            states: s_lo,
+            exponents: e_lo,
+            bias: b_lo,
+        },
+        Span {
+            offset: at,
+            states: s_hi,
+            exponents: e_hi,
+            bias: b_hi,
+        },
+    )
+}
+
 /// The forward and the backward pass and their product: the smoothed states (and bias).
 /// With [`handoff_index`] before the last sample the backward pass runs on a second thread
-/// from the handoff on (module documentation, "Threads"); one thread if it cannot be started,
-/// with the same result.
+/// from the handoff on (module documentation, "Threads"), and the forward pass's thread, once
+/// its pass is done, forms the product at the backward pass's chunks as they come; one thread
+/// if the second cannot be started, with the same result (the product at a sample is a
+/// function of the two passes' states there alone). Passes run one after the other form the
+/// product afterwards, on two threads from [`PARALLEL_PRODUCT`] samples on.
 fn run(
     params: &AhrsParams,
     options: &SmoothOptions,
@@ -794,25 +919,29 @@ fn run(
         .is_some_and(|m| m.iter().any(|r| usable(r) && r.iter().any(|x| *x != 0.0)));
     let at = handoff_index(n, params.sample_time, has_mag);
     let mut fwd = Pass::new(n, want_bias, exact)?;
-    let mut back = Pass::new(n.saturating_sub(1), want_bias, exact)?;
     let abort = AtomicBool::new(false);
     let mut handoff = None;
     let mut back_result = None;
     std::thread::scope(|s| -> Result<()> {
         let (tx, rx) = std::sync::mpsc::channel::<Handoff>();
-        let back_ref = &mut back;
+        let (chunk_tx, chunk_rx) = std::sync::mpsc::channel::<Chunk>();
         let abort_ref = &abort;
         let thread = if threads && at + 1 < n {
             std::thread::Builder::new()
                 .name("bingham-smooth".into())
                 .spawn_scoped(s, move || -> Option<Result<usize>> {
                     let h = rx.recv().ok()?;
+                    // a closed channel: the forward pass failed, and nobody waits for these
+                    let emit = |c: Chunk| {
+                        let _ = chunk_tx.send(c);
+                    };
                     Some(backward_pass(
-                        params, options, input, &h, back_ref, abort_ref,
+                        params, options, input, &h, want_bias, abort_ref, emit,
                     ))
                 })
                 .ok()
         } else {
+            drop(chunk_tx);
             None
         };
         let concurrent = thread.is_some();
@@ -826,6 +955,12 @@ fn run(
         drop(tx);
         if fres.is_err() {
             abort.store(true, Ordering::Relaxed);
+        } else if concurrent {
+            // the product at each chunk as the backward pass hands it over, until it ends
+            let (_, mut all) = split_at(&mut fwd, 0);
+            for chunk in chunk_rx.iter() {
+                all.apply(options, &chunk);
+            }
         }
         if let Some(t) = thread {
             back_result = Some(
@@ -840,71 +975,48 @@ fn run(
         }
         fres
     })?;
-    let start = match back_result {
-        Some(r) => r?,
-        None => {
-            let h = handoff.ok_or_else(|| {
-                Error::Numerical("the smoother's forward pass gave no handoff".into())
-            })?;
-            backward_pass(params, options, input, &h, &mut back, &abort)?
-        }
-    };
-    // the product at every sample the backward pass predicted, the two halves on two threads
-    let start = start.min(back.states.len()).min(n);
-    let (mid, rest) = (start / 2, start - start / 2);
-    let (f_lo, f_hi) = fwd.states[..start].split_at_mut(mid);
-    // the backward states are stored from sample start − 1 down: the upper half first
-    let (b_hi, b_lo) = back.states.split_at(rest);
-    let (e_lo, e_hi) = fwd.exponents.split_at(if exact { mid } else { 0 });
-    let (be_hi, be_lo) = back.exponents.split_at(if exact { rest } else { 0 });
-    let (fb_lo, fb_hi) = match fwd.bias.as_mut() {
-        Some(f) => {
-            let (a, b) = f.split_at_mut(mid);
-            (Some(a), Some(b))
-        }
-        None => (None, None),
-    };
-    let (bb_hi, bb_lo) = match back.bias.as_ref() {
-        Some(b) => {
-            let (h, l) = b.split_at(rest);
-            (Some(h), Some(l))
-        }
-        None => (None, None),
-    };
-    let lo = Half {
-        states: f_lo,
-        exponents: e_lo,
-        bias: fb_lo,
-        back: b_lo,
-        back_exponents: be_lo,
-        back_bias: bb_lo,
-    };
-    let hi = Half {
-        states: f_hi,
-        exponents: e_hi,
-        bias: fb_hi,
-        back: b_hi,
-        back_exponents: be_hi,
-        back_bias: bb_hi,
-    };
-    let hi = std::sync::Mutex::new(Some(hi));
-    let run_hi = || {
-        if let Some(h) = hi.lock().ok().and_then(|mut h| h.take()) {
-            h.apply(options);
-        }
-    };
-    if threads && start >= PARALLEL_PRODUCT {
+    if let Some(r) = back_result {
+        r?;
+        return Ok((fwd.states, fwd.bias));
+    }
+    // the passes one after the other: the backward pass's chunks kept, then the product
+    let h = handoff
+        .ok_or_else(|| Error::Numerical("the smoother's forward pass gave no handoff".into()))?;
+    let mut chunks = Vec::new();
+    backward_pass(params, options, input, &h, want_bias, &abort, |c| {
+        chunks.push(c)
+    })?;
+    let total: usize = chunks.iter().map(|c| c.pass.states.len()).sum();
+    // the chunks descend: the first half of them (the upper samples) on a second thread
+    let half = chunks.len() / 2;
+    if threads && total >= PARALLEL_PRODUCT && half > 0 {
+        let mid = chunks[half - 1].lo;
+        let (upper, lower) = chunks.split_at(half);
+        let (mut lo, hi) = split_at(&mut fwd, mid);
+        let hi = std::sync::Mutex::new(Some(hi));
+        let run_hi = || {
+            if let Some(mut h) = hi.lock().ok().and_then(|mut h| h.take()) {
+                for c in upper {
+                    h.apply(options, c);
+                }
+            }
+        };
         std::thread::scope(|s| {
             // no thread: the half is left for this one
             let _ = std::thread::Builder::new()
                 .name("bingham-smooth".into())
                 .spawn_scoped(s, run_hi);
-            lo.apply(options);
+            for c in lower {
+                lo.apply(options, c);
+            }
         });
+        run_hi();
     } else {
-        lo.apply(options);
+        let (_, mut all) = split_at(&mut fwd, 0);
+        for c in &chunks {
+            all.apply(options, c);
+        }
     }
-    run_hi();
     Ok((fwd.states, fwd.bias))
 }
 
@@ -990,8 +1102,10 @@ mod tests {
     }
 
     /// The passes on two threads give the result of one thread bit for bit (the handoff and
-    /// the product's halves are functions of the recording alone), with the bias and the exact
-    /// product, on a recording long enough for both to be concurrent.
+    /// the product at each sample are functions of the recording alone), with the bias and the
+    /// exact product, on a recording long enough for both to be concurrent (the product formed
+    /// chunk by chunk as the backward pass goes), and on one without a magnetometer (the passes
+    /// in turn, the product's halves on two threads).
     #[test]
     fn two_threads_give_the_result_of_one() {
         let mut rng = Rng(7);
@@ -1049,6 +1163,28 @@ mod tests {
                 assert_eq!(b1[k].b, b2[k].b, "sample {k}");
                 assert_eq!(b1[k].p, b2[k].p, "sample {k}");
             }
+        }
+        // without the magnetometer the passes run in turn, and over PARALLEL_PRODUCT samples
+        // the product's two halves (of the backward pass's chunks) on two threads
+        let long = 3 * n;
+        let (gyr2, acc2): (Vec<_>, Vec<_>) = (0..long).map(|k| (gyr[k % n], acc[k % n])).unzip();
+        let input = SmoothInput {
+            time: None,
+            gyr: &gyr2,
+            acc: &acc2,
+            mag: None,
+        };
+        let params = AhrsParams::new(dt);
+        let options = SmoothOptions::default();
+        assert!(long > PARALLEL_PRODUCT + CHUNK);
+        let (f1, b1) = run(&params, &options, &input, true, false).unwrap();
+        let (f2, b2) = run(&params, &options, &input, true, true).unwrap();
+        let (b1, b2) = (b1.unwrap(), b2.unwrap());
+        for k in 0..long {
+            assert_eq!(f1[k].q, f2[k].q, "sample {k}");
+            assert_eq!(f1[k].c, f2[k].c, "sample {k}");
+            assert_eq!(b1[k].b, b2[k].b, "sample {k}");
+            assert_eq!(b1[k].p, b2[k].p, "sample {k}");
         }
     }
 

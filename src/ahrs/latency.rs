@@ -121,6 +121,12 @@ pub(super) struct LatencyEstimator {
     /// The mean of `(L_A − L_B)²` (s²) over the blocks, and the blocks averaged so far.
     scatter: f64,
     blocks: f64,
+    /// [`LatencyEstimator::estimate`] as of the last change of the sums, the evidence or the
+    /// scatter (what it depends on): the AHRS reads it at every sample, and most samples at
+    /// the higher rates, and every sample without an undisturbed field, change none of them.
+    current: Option<f64>,
+    /// Whether the sums, the evidence or the scatter changed in this push.
+    changed: bool,
 }
 
 impl LatencyEstimator {
@@ -148,12 +154,23 @@ impl LatencyEstimator {
             half: 0,
             scatter: 0.0,
             blocks: 0.0,
+            current: None,
+            changed: false,
         }
     }
 
     /// One sample: `dq` the bias-corrected gyroscope increment the prediction used, `mag` the
     /// raw magnetometer sample if it passed the disturbance test.
     pub(super) fn push(&mut self, dq: &[f64; 4], mag: Option<&[f64; 3]>) {
+        self.changed = false;
+        self.push_sample(dq, mag);
+        if self.changed {
+            self.current = self.compute_estimate();
+        }
+    }
+
+    /// [`LatencyEstimator::push`] without the estimate's update.
+    fn push_sample(&mut self, dq: &[f64; 4], mag: Option<&[f64; 3]>) {
         self.block_samples += 1;
         // consecutive pairs alternate between the halves: with an even span, the two pairs a
         // magnetometer sample is in (k and k + W) fall into the same half
@@ -255,6 +272,7 @@ impl LatencyEstimator {
         accumulate_lags(lower, r(head + 1..len), &d, &mb, inv_n2, a);
         accumulate_lags(upper, r(0..head + 1), &d, &mb, inv_n2, a);
         self.evidence += w * self.dt;
+        self.changed = true;
     }
 
     /// Every [`BLOCK_TIME`]: the halves' vertices update the scatter. Each half's vertex is
@@ -278,6 +296,7 @@ impl LatencyEstimator {
             // a running mean until MEMORY seconds of blocks, then exponential forgetting
             let alpha = (1.0 / self.blocks).max(BLOCK_TIME / MEMORY);
             self.scatter += alpha * (d * d - self.scatter);
+            self.changed = true;
         }
     }
 
@@ -305,8 +324,13 @@ impl LatencyEstimator {
     /// The latency estimate (s, within 0 … `W·dt`), once [`MIN_EVIDENCE`] weighted seconds have
     /// been seen and the sums single out a lag (a convex parabola at the smallest): the vertex
     /// `L` of the two halves' mean, shrunk by its scatter to `L·max(0, 1 − σ²/L²)` (module
-    /// documentation).
+    /// documentation). Kept from the last push that changed what it depends on.
     pub(super) fn estimate(&self) -> Option<f64> {
+        self.current
+    }
+
+    /// [`LatencyEstimator::estimate`] from the sums, the evidence and the scatter.
+    fn compute_estimate(&self) -> Option<f64> {
         if self.evidence < MIN_EVIDENCE {
             return None;
         }

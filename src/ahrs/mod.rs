@@ -142,6 +142,8 @@ pub struct Ahrs {
     sample_state: SampleState,
     /// The online estimate of the magnetometer's latency (a readout; not used by the filter).
     latency: LatencyEstimator,
+    /// Whether the latency estimate is kept (see [`Ahrs::without_latency_estimate`]).
+    estimate_latency: bool,
     samples: u64,
     /// The timestamp (s) of the last sample of a timed batch ([`Ahrs::update_batch_timed`]).
     last_time: Option<f64>,
@@ -159,6 +161,7 @@ impl Ahrs {
             filter: None,
             sample_state: SampleState::new(params, &coeffs),
             latency: LatencyEstimator::new(params.sample_time),
+            estimate_latency: true,
             samples: 0,
             last_time: None,
         })
@@ -296,7 +299,7 @@ impl Ahrs {
     /// orientation's spread.
     pub fn orientation_covariance(&self) -> Result<[f64; 9]> {
         let world = match self.stated_covariance()? {
-            Some((c, _)) => c,
+            Some(c) => c,
             // the uniform distribution: ω_i = 1/4
             None => Matrix3::identity(),
         };
@@ -309,9 +312,9 @@ impl Ahrs {
         Ok(out)
     }
 
-    /// The stated covariance (world frame) and its variances along the state's principal
-    /// directions (module `uncertainty`); `None` before the first sample.
-    fn stated_covariance(&self) -> Result<Option<(Matrix3<f64>, [f64; 3])>> {
+    /// The stated covariance (world frame, module `uncertainty`); `None` before the first
+    /// sample.
+    fn stated_covariance(&self) -> Result<Option<Matrix3<f64>>> {
         let Some(f) = &self.filter else {
             return Ok(None);
         };
@@ -320,10 +323,11 @@ impl Ahrs {
         let q = core.mode();
         let r = q4::to_matrix(&q);
         let r = Matrix3::from_fn(|i, j| r[i][j]);
-        let dirs = bias::principal_directions(m, &q).map(|u| r * u);
+        let dirs = bias::principal_directions(m, &q);
         // the pending noise made positive semi-definite, as the next correction takes it
-        let pending = r * bias::psd(&self.sample_state.bias.pending) * r.transpose();
+        let pending = bias::psd(&self.sample_state.bias.pending);
         Ok(Some(uncertainty::stated(
+            &r,
             &dirs,
             &pending,
             &self.stated_parts(),
@@ -400,6 +404,16 @@ impl Ahrs {
     /// the magnetometer present and undisturbed, or when the residuals do not single out a lag.
     pub fn mag_latency_estimate(&self) -> Option<f64> {
         self.latency.estimate()
+    }
+
+    /// Stops the latency estimate (from the next sample on; [`Ahrs::mag_latency_estimate`]
+    /// then stays what it was), for an AHRS whose estimate nobody reads and whose
+    /// `mag_latency` is not [`LATENCY_ESTIMATE`], so that the filter does not use it either:
+    /// every other output is the same bit for bit. Crate-internal: the offline smoother's
+    /// backward pass (`crate::smoother`), whose magnetometer samples are shifted by the forward
+    /// pass's estimate instead.
+    pub(crate) fn without_latency_estimate(&mut self) {
+        self.estimate_latency = false;
     }
 
     /// The latency estimate, or an [`Error::NotConverged`] saying why there is none.
@@ -527,18 +541,29 @@ impl Ahrs {
             .as_mut()
             .ok_or_else(|| Error::Numerical("AHRS without a state after its first sample".into()))?
             .core4_mut()?;
+        // the sample works on the state in place; a refused sample puts these copies back
         let saved = core.save();
-        let mut s = self.sample_state.clone();
+        let saved_state = self.sample_state.clone();
         let mut c = self.coeffs;
         if self.params.mag_latency == LATENCY_ESTIMATE {
             c.mag_lead = self.latency.estimate().unwrap_or(0.0) / self.params.sample_time;
         }
-        match step(&self.params, &c, core, &mut s, dt, gyr, far, acc, mag) {
+        match step(
+            &self.params,
+            &c,
+            core,
+            &mut self.sample_state,
+            dt,
+            gyr,
+            far,
+            acc,
+            mag,
+        ) {
             Ok((dq, mag_used)) => {
-                self.sample_state = s;
                 // the latency estimate works on the raw samples at the nominal period
                 // (infallible, after the rest); a sample off the period is not one of them
-                if gyr.is_some()
+                if self.estimate_latency
+                    && gyr.is_some()
                     && (dt - self.params.sample_time).abs() <= 0.5 * self.params.sample_time
                 {
                     self.latency.push(&dq, if mag_used { mag } else { None });
@@ -548,6 +573,7 @@ impl Ahrs {
             }
             Err(e) => {
                 core.restore(saved);
+                self.sample_state = saved_state;
                 Err(e)
             }
         }

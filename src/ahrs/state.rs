@@ -1,6 +1,6 @@
 //! The state a sample of the AHRS changes besides the Bingham state: one part per sensor, the
-//! gyroscope bias, the sensors' times and the health readout (module `ahrs`: copied, changed by
-//! the steps of a sample and committed at its end).
+//! gyroscope bias, the sensors' times and the health readout (module `ahrs`: changed in place by
+//! the steps of a sample, a copy taken before it restored when the sample is refused).
 
 use super::accel::Accel;
 use super::bias::BiasState;
@@ -13,8 +13,8 @@ use super::rest::Rest;
 use super::timing::SensorTimes;
 use super::uncertainty::Calibration;
 
-/// The state a sample changes besides the Bingham state (small; copied, changed and committed
-/// at the end of the sample): one part per sensor, the bias, the times, the health readout.
+/// The state a sample changes besides the Bingham state (small; changed in place, restored from
+/// a copy when the sample is refused): one part per sensor, the bias, the times, the health readout.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct SampleState {
     /// The gyroscope bias's Kalman filter and the accumulated process noise (module `bias`).

@@ -182,39 +182,44 @@ pub(super) fn stated_variances(z: &[f64; 3], noise: &[f64; 3], parts: &Parts) ->
     })
 }
 
-/// The stated covariance (rad², world frame) and the variances along the state's principal
-/// directions: `dirs` the principal directions at the mode (world frame, orthonormal), `extra`
-/// the pending process noise in the same frame, `parts` the rest. The pending noise enters in
-/// the principal basis scaled as `D^½ Ñ D^½` (a congruence: it stays positive semi-definite);
-/// the references' variances about the world axes. Returns `(C, v)`, `v` those of
-/// [`stated_variances`], `trace C = Σ v`.
+/// The stated covariance (rad², world frame): `dirs` the principal directions at the mode in
+/// the body frame (orthonormal), `r` the mode's rotation (body → world), `extra` the pending
+/// process noise in the body frame, `parts` the rest. The pending noise enters in the principal
+/// basis scaled as `D^½ Ñ D^½` (a congruence: it stays positive semi-definite); the references'
+/// variances about the world axes. With `U` the directions as columns and `K` the covariance in
+/// the principal basis (its diagonal [`stated_variances`] without the references, its
+/// off-diagonal the pending noise's `(UᵀNU)_ij √(s_i s_j)`), `C = (RU) K (RU)ᵀ` plus the
+/// references: `trace C = Σ v` of [`stated_variances`]. The quadratic forms of the noise are
+/// taken in the body frame (`Uᵀ N U`, what the world frame's `(RU)ᵀ (R N Rᵀ)(RU)` is in exact
+/// arithmetic).
 pub(super) fn stated(
+    r: &Matrix3<f64>,
     dirs: &[Vector3<f64>; 3],
     extra: &Matrix3<f64>,
     parts: &Parts,
-) -> (Matrix3<f64>, [f64; 3]) {
-    let z = [dirs[0].z, dirs[1].z, dirs[2].z];
-    let noise: [f64; 3] = std::array::from_fn(|i| (dirs[i].transpose() * extra * dirs[i])[0]);
+) -> Matrix3<f64> {
+    let u = Matrix3::from_columns(dirs);
+    let n = u.transpose() * extra * u;
+    let d = r * u;
+    let z = [d[(2, 0)], d[(2, 1)], d[(2, 2)]];
+    let noise = [n[(0, 0)], n[(1, 1)], n[(2, 2)]];
     let v = stated_variances(&z, &noise, parts);
     let s: [f64; 3] = std::array::from_fn(|i| parts.scale_along(z[i] * z[i]));
     let tilt_ref = parts.tilt_ref;
-    let mut c = Matrix3::zeros();
-    for i in 0..3 {
-        for j in 0..3 {
-            let cij = if i == j {
-                // the diagonal as stated_variances has it, the references' parts apart
-                let z2 = (z[i] * z[i]).min(1.0);
-                v[i] - parts.heading_ref * z2 - tilt_ref * (1.0 - z2)
-            } else {
-                (dirs[i].transpose() * extra * dirs[j])[0] * (s[i] * s[j]).sqrt()
-            };
-            c += dirs[i] * dirs[j].transpose() * cij;
+    let k = Matrix3::from_fn(|i, j| {
+        if i == j {
+            // the diagonal as stated_variances has it, the references' parts apart
+            let z2 = (z[i] * z[i]).min(1.0);
+            v[i] - parts.heading_ref * z2 - tilt_ref * (1.0 - z2)
+        } else {
+            0.5 * (n[(i, j)] + n[(j, i)]) * (s[i] * s[j]).sqrt()
         }
-    }
+    });
+    let mut c = d * k * d.transpose();
     c[(0, 0)] += tilt_ref;
     c[(1, 1)] += tilt_ref;
     c[(2, 2)] += parts.heading_ref;
-    (c, v)
+    c
 }
 
 /// The variation of the field's norm and dip over the motion, which shows how far the local

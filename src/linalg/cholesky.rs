@@ -3,7 +3,25 @@
 
 /// Solves `A x = b` in place (`a` k×k row-major symmetric positive definite, destroyed;
 /// `b` overwritten by `x`) by Cholesky; `false` if `A` is not numerically positive definite.
+/// k = 2 and 3 (the Newton steps of d = 3 and 4) run the same arithmetic with the size known
+/// at compile time (unrolled), so every k gives the same bits as the loop.
 pub(crate) fn cholesky_solve(k: usize, a: &mut [f64], b: &mut [f64]) -> bool {
+    match k {
+        2 => solve::<2>(a, b),
+        3 => solve::<3>(a, b),
+        _ => solve_k(k, a, b),
+    }
+}
+
+/// [`cholesky_solve`] for `k = K`.
+#[inline(always)]
+fn solve<const K: usize>(a: &mut [f64], b: &mut [f64]) -> bool {
+    solve_k(K, &mut a[..K * K], &mut b[..K])
+}
+
+/// [`cholesky_solve`]'s loop.
+#[inline(always)]
+fn solve_k(k: usize, a: &mut [f64], b: &mut [f64]) -> bool {
     for j in 0..k {
         let mut s = a[j * k + j];
         for p in 0..j {
