@@ -49,8 +49,9 @@
 //!    7. the field's average turned with the heading correction (module `magnetic`).
 //!
 //!    The evidence is per second: `κ_a = T/(acc_noise²·acc_tau)` for a period `T` (divided by
-//!    `1 + ((|ā| − g)/acc_reject)²`), `κ_m = T/(mag_noise²·mag_tau)`; the same defaults
-//!    therefore behave the same at 100 Hz and at 1 kHz.
+//!    `1 + ((|ā| − g)/acc_reject)²`), `κ_m = T/(mag_noise²·mag_tau·w)` (`w ≥ 1` from the
+//!    field's measured variation, module `magnetic`); the same defaults therefore behave the
+//!    same at 100 Hz and at 1 kHz.
 //!
 //! A new sensor (an external heading, say) is a module with its state, its per-sample step and
 //! its evidence item, a field of the per-sample state, and its calls in `step`.
