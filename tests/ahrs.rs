@@ -9,7 +9,8 @@
 use bingham::ahrs::{Ahrs, AhrsParams};
 use bingham::Error;
 use std::f64::consts::PI;
-use testkit::{qexp, qmul, rot, Rng64};
+use testkit::imu::{angle, normalize4, rms, to_sensor};
+use testkit::{qexp, qmul, Rng64};
 
 const G: f64 = 9.81;
 /// The magnetic field in the world frame (ENU, µT): north and down.
@@ -19,27 +20,6 @@ const BIAS_DEG: f64 = 0.5;
 // ---------------------------------------------------------------------------------------------
 // Quaternion helpers independent of the crate's `q4` (qmul, qexp, rot: testkit).
 
-fn normalize4(q: &[f64; 4]) -> [f64; 4] {
-    let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-    [q[0] / n, q[1] / n, q[2] / n, q[3] / n]
-}
-
-/// `R(q)ᵀ v` (world → sensor).
-fn to_sensor(q: &[f64; 4], v: &[f64; 3]) -> [f64; 3] {
-    let r = rot(q);
-    [
-        r[0][0] * v[0] + r[1][0] * v[1] + r[2][0] * v[2],
-        r[0][1] * v[0] + r[1][1] * v[1] + r[2][1] * v[2],
-        r[0][2] * v[0] + r[1][2] * v[1] + r[2][2] * v[2],
-    ]
-}
-
-/// The rotation angle between two orientations, `2 acos |⟨a, b⟩|`.
-fn angle(a: &[f64; 4], b: &[f64; 4]) -> f64 {
-    let d = a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>().abs();
-    2.0 * d.min(1.0).acos()
-}
-
 /// The angle between the two estimates of "up" in the sensor frame (the tilt error).
 fn tilt_error(a: &[f64; 4], b: &[f64; 4]) -> f64 {
     let (ua, ub) = (
@@ -48,10 +28,6 @@ fn tilt_error(a: &[f64; 4], b: &[f64; 4]) -> f64 {
     );
     let c = ua[0] * ub[0] + ua[1] * ub[1] + ua[2] * ub[2];
     c.clamp(-1.0, 1.0).acos()
-}
-
-fn rms(v: &[f64]) -> f64 {
-    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -12,17 +12,12 @@
 use bingham::ahrs::{Ahrs, AhrsParams, LATENCY_ESTIMATE, MAX_LATENCY};
 use bingham::Error;
 use std::f64::consts::PI;
-use testkit::{qexp, qmul, rot, Rng64};
+use testkit::imu::to_sensor;
+use testkit::{qexp, qmul, Rng64};
 
 /// The field in the world frame (ENU, µT): 50 µT, 60° dip, north.
 const FIELD: [f64; 3] = [0.0, 25.0, -43.301_270_189_221_93];
 const G: f64 = 9.81;
-
-/// `R(q)ᵀ v` (world → sensor).
-fn to_sensor(q: &[f64; 4], v: &[f64; 3]) -> [f64; 3] {
-    let r = rot(q);
-    [0, 1, 2].map(|i| r[0][i] * v[0] + r[1][i] * v[1] + r[2][i] * v[2])
-}
 
 /// BROAD's heading and inclination errors (rad) of the estimate `e` against the truth `t`:
 /// with `d = e ⊗ t⁻¹`, `2 atan(|d_z/d_w|)` and `2 acos(√(d_w² + d_z²))`.

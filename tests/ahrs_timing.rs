@@ -6,6 +6,7 @@
 //! the simulated suite (`python/tests/test_ahrs_faults.py`, `examples/python/ahrs_faults.py`).
 
 use bingham::ahrs::{Ahrs, AhrsParams};
+use testkit::imu::angle;
 
 const DT: f64 = 0.01;
 
@@ -46,14 +47,6 @@ fn stream_with_truth(n: usize) -> (Rows3, Rows3, Rows3, Vec<[f64; 4]>) {
         truth.push(q);
     }
     (gyr, acc, mag, truth)
-}
-
-/// The rotation angle (rad) between two orientations.
-fn angle(a: &[f64; 4], b: &[f64; 4]) -> f64 {
-    let d = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3])
-        .abs()
-        .min(1.0);
-    2.0 * d.acos()
 }
 
 fn mul(a: &[f64; 4], b: &[f64; 4]) -> [f64; 4] {

@@ -7,12 +7,14 @@
 //! - [`read_reference`]: the high-precision reference tables `tests/data/normalization_d*.csv`;
 //! - independent references: [`rel`], [`norm`], the 3-vector helpers [`dot3`], [`dist3`],
 //!   [`matvec`], the textbook rotation matrix [`rot`], [`gauss_legendre`];
+//! - [`imu`]: the AHRS and smoother tests' orientation helpers (angle, world → sensor, RMS);
 //! - [`fuzz`]: generators of valid and hostile inputs, sentinel-guarded buffers, invariant checks
 //!   and a crash reporter (the C ABI fuzz harness, the thread and long-run tests);
 //! - [`scenarios`]: the filter scenarios of JAIF Sec. 7 and their simulation, given the
 //!   library's sampler.
 
 pub mod fuzz;
+pub mod imu;
 mod reference;
 mod rng;
 pub mod scenarios;
