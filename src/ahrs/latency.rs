@@ -56,6 +56,7 @@
 //!   `reject180_nomag`; docs/accuracy/ahrs.md); a latency measured well (BROAD's 12 ms) is not
 //!   changed by it.
 
+use super::lowpass::CORRECTION_PERIOD;
 use super::vec3::{cross3, dot3, scale3};
 use crate::quaternion::q4;
 
@@ -70,6 +71,13 @@ const MEMORY: f64 = 30.0;
 /// How often (s) the halves' vertices update the estimate's scatter (module documentation,
 /// "the estimate's uncertainty").
 const BLOCK_TIME: f64 = 1.0;
+/// How often (s) the estimate the compensation turns the field samples by is refitted: once a
+/// correction period ([`CORRECTION_PERIOD`]), not at every sample. The fit reads every lag's
+/// sums (a tenth of a sample's work at 1 kHz); the sums forget over [`MEMORY`] seconds, so
+/// the estimate moves by a small fraction of its scatter in a period, and the field samples
+/// of one period all take one latency. A reader ([`LatencyEstimator::estimate`]) gets the fit
+/// of the sums as they are.
+const REFIT_TIME: f64 = CORRECTION_PERIOD;
 /// The weighted seconds of motion needed before there is an estimate.
 const MIN_EVIDENCE: f64 = 5.0;
 /// The rate change (rad/s²) across the lag window at which a pair has half weight.
@@ -121,12 +129,16 @@ pub(super) struct LatencyEstimator {
     /// The mean of `(L_A − L_B)²` (s²) over the blocks, and the blocks averaged so far.
     scatter: f64,
     blocks: f64,
-    /// [`LatencyEstimator::estimate`] as of the last change of the sums, the evidence or the
-    /// scatter (what it depends on): the AHRS reads it at every sample, and most samples at
-    /// the higher rates, and every sample without an undisturbed field, change none of them.
+    /// [`LatencyEstimator::estimate`] as of the last refit ([`REFIT_TIME`]): what the
+    /// compensation reads at every sample.
     current: Option<f64>,
     /// Whether the sums, the evidence or the scatter changed in this push.
     changed: bool,
+    /// Whether they changed since the last refit, the pushes since it, and the pushes between
+    /// refits (`REFIT_TIME / dt`, rounded, at least 1).
+    stale: bool,
+    since_refit: usize,
+    refit_every: usize,
 }
 
 impl LatencyEstimator {
@@ -156,6 +168,9 @@ impl LatencyEstimator {
             blocks: 0.0,
             current: None,
             changed: false,
+            stale: false,
+            since_refit: 0,
+            refit_every: ((REFIT_TIME / dt).round() as usize).max(1),
         }
     }
 
@@ -164,8 +179,12 @@ impl LatencyEstimator {
     pub(super) fn push(&mut self, dq: &[f64; 4], mag: Option<&[f64; 3]>) {
         self.changed = false;
         self.push_sample(dq, mag);
-        if self.changed {
+        self.stale |= self.changed;
+        self.since_refit += 1;
+        if self.stale && self.since_refit >= self.refit_every {
             self.current = self.compute_estimate();
+            self.stale = false;
+            self.since_refit = 0;
         }
     }
 
@@ -285,8 +304,7 @@ impl LatencyEstimator {
             return;
         }
         let w = self.window;
-        let Some((_, i, den)) = self.fit(|j| 0.5 * (self.sums[0][w - j] + self.sums[1][w - j]))
-        else {
+        let Some((_, i, den)) = self.fit() else {
             return;
         };
         let slope = |h: usize| self.sums[h][w - (i - 1)] - self.sums[h][w - (i + 1)];
@@ -300,19 +318,25 @@ impl LatencyEstimator {
         }
     }
 
-    /// The parabola through the smallest of the sums `s(j)` (lag `j`) and its neighbours: its
-    /// vertex (s), not clamped (it may lie up to a lag beyond `0 … W·dt`), the middle lag `i`
-    /// and the second difference `den`; `None` if it is not convex there.
-    fn fit(&self, s: impl Fn(usize) -> f64) -> Option<(f64, usize, f64)> {
+    /// The parabola through the smallest of the halves' mean `s(j) = ½(S_A(j) + S_B(j))` (lag
+    /// `j`) and its neighbours: its vertex (s), not clamped (it may lie up to a lag beyond
+    /// `0 … W·dt`), the middle lag `i` and the second difference `den`; `None` if it is not
+    /// convex there.
+    fn fit(&self) -> Option<(f64, usize, f64)> {
         let w = self.window;
+        // s(j) for j = 0 … W, from sums[W − j]: formed once (the AHRS fits after most pushes)
+        let mut s = [0.0; RING];
+        for (j, v) in s[..=w].iter_mut().enumerate() {
+            *v = 0.5 * (self.sums[0][w - j] + self.sums[1][w - j]);
+        }
         let (mut best, mut min) = (0, f64::INFINITY);
-        for j in 0..=w {
-            if s(j) < min {
-                (best, min) = (j, s(j));
+        for (j, &v) in s[..=w].iter().enumerate() {
+            if v < min {
+                (best, min) = (j, v);
             }
         }
         let i = best.clamp(1, w - 1);
-        let (y0, y1, y2) = (s(i - 1), s(i), s(i + 1));
+        let (y0, y1, y2) = (s[i - 1], s[i], s[i + 1]);
         let den = y0 - 2.0 * y1 + y2;
         if !(den > 0.0 && den.is_finite()) {
             return None;
@@ -324,8 +348,14 @@ impl LatencyEstimator {
     /// The latency estimate (s, within 0 … `W·dt`), once [`MIN_EVIDENCE`] weighted seconds have
     /// been seen and the sums single out a lag (a convex parabola at the smallest): the vertex
     /// `L` of the two halves' mean, shrunk by its scatter to `L·max(0, 1 − σ²/L²)` (module
-    /// documentation). Kept from the last push that changed what it depends on.
+    /// documentation), from the sums as they are.
     pub(super) fn estimate(&self) -> Option<f64> {
+        self.compute_estimate()
+    }
+
+    /// [`LatencyEstimator::estimate`] as of the last refit, at most [`REFIT_TIME`] old: what
+    /// the compensation turns the field samples by.
+    pub(super) fn compensated(&self) -> Option<f64> {
         self.current
     }
 
@@ -335,7 +365,7 @@ impl LatencyEstimator {
             return None;
         }
         let w = self.window;
-        let (l, _, _) = self.fit(|j| 0.5 * (self.sums[0][w - j] + self.sums[1][w - j]))?;
+        let (l, _, _) = self.fit()?;
         let var = 0.25 * self.scatter;
         // E[L²] = L_true² + σ²: L² − σ² estimates L_true² without bias, and the shrinkage
         // L_true²/(L_true² + σ²) that minimizes the compensation's mean square error becomes
@@ -371,12 +401,17 @@ fn accumulate_lags(
     inv_n2: f64,
     a: f64,
 ) {
-    for (((s, &x), &y), &z) in sums.iter_mut().zip(rx).zip(ry).zip(rz) {
+    // indexed over slices of one length (no bounds checks in the loop, which the compiler
+    // then vectorizes: the lags are independent)
+    let n = sums.len();
+    let (rx, ry, rz) = (&rx[..n], &ry[..n], &rz[..n]);
+    for i in 0..n {
+        let (x, y, z) = (rx[i], ry[i], rz[i]);
         let r0 = d[0] + (y * m[2] - z * m[1]);
         let r1 = d[1] + (z * m[0] - x * m[2]);
         let r2 = d[2] + (x * m[1] - y * m[0]);
         let e = (r0 * r0 + r1 * r1 + r2 * r2) * inv_n2;
-        *s += a * (e - *s);
+        sums[i] += a * (e - sums[i]);
     }
 }
 

@@ -542,12 +542,19 @@ impl Ahrs {
             .as_mut()
             .ok_or_else(|| Error::Numerical("AHRS without a state after its first sample".into()))?
             .core4_mut()?;
-        // the sample works on the state in place; a refused sample puts these copies back
-        let saved = core.save();
-        let saved_state = self.sample_state.clone();
+        // the sample works on the state in place; a refused sample puts these copies back.
+        // Only a correction can refuse a sample (the other steps cannot fail), so the copies
+        // are taken only when this sample ends a correction period: the test `step` makes,
+        // on the period this sample completes (the same sum in the same order).
+        let saved = correction_due(
+            &self.params,
+            &self.coeffs,
+            self.sample_state.times.period + dt,
+        )
+        .then(|| (core.save(), self.sample_state.clone()));
         let mut c = self.coeffs;
         if self.params.mag_latency == LATENCY_ESTIMATE {
-            c.mag_lead = self.latency.estimate().unwrap_or(0.0) / self.params.sample_time;
+            c.mag_lead = self.latency.compensated().unwrap_or(0.0) / self.params.sample_time;
         }
         match step(
             &self.params,
@@ -573,8 +580,10 @@ impl Ahrs {
                 Ok(())
             }
             Err(e) => {
-                core.restore(saved);
-                self.sample_state = saved_state;
+                if let Some((core_saved, state_saved)) = saved {
+                    core.restore(core_saved);
+                    self.sample_state = state_saved;
+                }
                 Err(e)
             }
         }
@@ -852,7 +861,7 @@ fn step(
     // 5. Correction, once the samples since the last one span the correction period (the
     // same cadence as `correct_every` nominal samples): the period's length and the time the
     // sensors' samples covered in it (module `timing`).
-    if s.times.period >= c.correct_time - 0.5 * p.sample_time {
+    if correction_due(p, c, s.times.period) {
         let (t, t_acc, t_mag) = s.times.take_period();
         // 5.1 the prior: the state composed with the accumulated process noise
         let prior_total = 4.0 * (s.omega[0] + s.omega[1] + s.omega[2]) + s.bias.pending.trace();
@@ -890,6 +899,13 @@ fn step(
         }
     }
     Ok((turn.dq, mag_used))
+}
+
+/// Whether a correction period ends once the samples since the last correction span `period`
+/// seconds: they span the correction period (`correct_time`, the same cadence as
+/// `correct_every` nominal samples) within half a sample.
+fn correction_due(p: &AhrsParams, c: &Coeffs, period: f64) -> bool {
+    period >= c.correct_time - 0.5 * p.sample_time
 }
 
 /// `e` with "sample k: " in front of its message.
