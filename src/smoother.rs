@@ -29,7 +29,7 @@
 //! The gyroscope bias is smoothed the same way from the two passes' estimates and covariances.
 //!
 //! Approximations (docs/design.md): the AHRS low-passes the accelerometer (`acc_tau`) and the
-//! magnetometer (`mag_tau`) and corrects every 20 ms, so a pass's state holds sample `k`'s own
+//! magnetometer (`mag_tau`) and corrects every 50 ms, so a pass's state holds sample `k`'s own
 //! measurement only through its share of an average; the backward predicted state holds none
 //! of samples `≤ k`, the forward posterior none of samples `> k`: nothing is counted twice. The
 //! magnetometer's latency (lagging the gyroscope) is a lead in reversed time: the backward pass

@@ -155,7 +155,12 @@ fn run_online(
 
 #[test]
 fn smooths_the_simulated_motion_better_than_the_online_ahrs_with_an_honest_spread() {
-    for seed in [1u64, 2, 3] {
+    // Sixteen seeds: the smoothed error is 0.56-0.65 of the online one on most of them and
+    // near 0.8 on a few (which ones moves with any change at the rounding level, e.g. the
+    // correction period: seeds 4 and 8 at 20 ms, 3 and 10 at 50 ms), so each seed is held to
+    // being better and the mean ratio to the margin.
+    let mut ratios = Vec::new();
+    for seed in 1u64..=16 {
         let s = simulate(seed, 60.0);
         let p = AhrsParams::new(s.dt);
         let (qo, so, bo) = run_online(&p, &s, true);
@@ -186,7 +191,8 @@ fn smooths_the_simulated_motion_better_than_the_online_ahrs_with_an_honest_sprea
             bo_err.to_degrees(),
             bs_err.to_degrees()
         );
-        assert!(es < 0.7 * eo, "smoothed {es} vs online {eo}");
+        assert!(es < 0.9 * eo, "seed {seed}: smoothed {es} vs online {eo}");
+        ratios.push(es / eo);
         assert!(
             (0.5..=2.0).contains(&calibration),
             "error/spread {calibration}"
@@ -202,6 +208,8 @@ fn smooths_the_simulated_motion_better_than_the_online_ahrs_with_an_honest_sprea
             assert!(c[0] > 0.0 && c[0] * c[4] - c[1] * c[3] > 0.0);
         }
     }
+    let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    assert!(mean < 0.7, "mean smoothed/online error {mean}: {ratios:?}");
 }
 
 /// Dropped samples (rows removed, timestamps given): the backward pass bridges an interval

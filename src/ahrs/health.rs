@@ -17,7 +17,7 @@
 //! - heading: `ν_m = δ² / (b̂ᵀ Σ b̂ + σ_m²)` (1 degree of freedom).
 //!
 //! Each is averaged per degree of freedom over [`HEALTH_TIME`] (an exponential average over
-//! the corrections, which come every 20 ms at every sample rate), so that one burst of linear
+//! the corrections, which come every correction period at every sample rate), so that one burst of linear
 //! acceleration does not count as a mistake while a wrong model, which disagrees all the time,
 //! does. A third average does not depend on the state's spread: the gravity score
 //! `((|ā| − g)/acc_reject)²`. The accelerometer is low-passed in the frame the gyroscope

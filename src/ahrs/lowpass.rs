@@ -57,9 +57,16 @@ pub(super) struct Coeffs {
 /// The period (s) of the AHRS's correction steps (the Bingham composition with the process
 /// noise accumulated since the last step, and the Bayes update with the accelerometer and
 /// magnetometer evidence accumulated over it). The orientation follows the gyroscope at every
-/// sample; the corrections act on time scales of a second and longer, so 20 ms steps change
-/// them by well under a percent while the cost no longer grows with the sample rate.
-pub const CORRECTION_PERIOD: f64 = 0.02;
+/// sample, the sensors' averages and the disturbance test run at every sample, and a period's
+/// evidence is worth the time its samples cover: the period only sets how often the evidence
+/// is applied. The corrections act on time scales of a second and longer (the averages'
+/// `acc_tau` and `mag_tau`, the bias), so the period adds a delay of half a period to
+/// them: 50 ms steps gave the same errors as 20 ms steps to the third decimal on the BROAD
+/// trials and the simulated suite, and the first figure to move was at 200 ms (BROAD trial
+/// 34's fast spins, 1.98° → 2.21°; docs/accuracy/ahrs.md, "The correction period"). A
+/// correction costs 4–6 times a sample's prediction, so the period sets the cost per sample at
+/// the rates where it spans few samples (every third sample at 50 Hz).
+pub const CORRECTION_PERIOD: f64 = 0.05;
 
 impl Coeffs {
     pub(super) fn new(p: &AhrsParams) -> Coeffs {

@@ -34,8 +34,8 @@
 //! 4. **Magnetometer** (module `magnetic`; skipped for a missing, zero or non-finite sample):
 //!    the disturbance test, decided per phase with hysteresis, and the field averaged in the
 //!    world frame of the estimate.
-//! 5. **Correction** (module `correction`), every [`CORRECTION_PERIOD`] (20 ms; every sample
-//!    below 50 Hz):
+//! 5. **Correction** (module `correction`), every [`CORRECTION_PERIOD`] (50 ms; every sample
+//!    at 20 Hz and below):
 //!    1. the prior: the state composed with the accumulated process noise (moment matching);
 //!    2. the accelerometer's tilt evidence, the likelihood `exp(κ_a upᵀ R(q) ā/|ā|)`
 //!       (module `accel`);
