@@ -1060,9 +1060,25 @@ static void test_ahrs_bias_uncertainty(void) {
         check_msg("bingham_ahrs_new", "gyro_scale_noise");
         CHECK(a == (bingham_ahrs *)no_access());
     }
+    /* gyro_scale_std: 0 to 0.05 */
+    CHECK(p.gyro_scale_std >= 0.0 && p.gyro_scale_std <= 0.05);
+    const double bad_scale_std[4] = {NAN, -1e-3, 0.06, INFINITY};
+    for (int k = 0; k < 4; ++k) {
+        q = p;
+        q.gyro_scale_std = bad_scale_std[k];
+        CHECK_STATUS(bingham_ahrs_new(&q, &a), BINGHAM_ERR_INVALID_ARGUMENT);
+        check_msg("bingham_ahrs_new", "gyro_scale_std");
+        CHECK(a == (bingham_ahrs *)no_access());
+    }
     /* gyro_scale_noise = 0 is valid (no rate-proportional noise) */
     q = p;
     q.gyro_scale_noise = 0.0;
+    a = NULL;
+    CHECK_OK(bingham_ahrs_new(&q, &a));
+    bingham_ahrs_free(a);
+    /* gyro_scale_std = 0 is valid (the scale not estimated) */
+    q = p;
+    q.gyro_scale_std = 0.0;
     a = NULL;
     CHECK_OK(bingham_ahrs_new(&q, &a));
     bingham_ahrs_free(a);

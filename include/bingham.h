@@ -570,6 +570,18 @@ typedef struct bingham_ahrs_params {
      * to the rate).
      */
     double gyro_scale_noise;
+    /**
+     * Initial standard deviation (relative, per axis, 0 to 0.05) of the gyroscope's scale
+     * error: the gyroscope reads `(1 + s_i)` times the rate about its axis `i` (plus the
+     * bias), and the Kalman filter of the bias estimates `s` with it from the same
+     * corrections (module `bias`; `Ahrs::gyro_scale`), starting from 0 with this
+     * uncertainty and holding it constant (no random walk: a scale error is a property of
+     * the sensor's calibration). A rate-proportional heading drift (a fast spin while the
+     * magnetometer is rejected) is then taken out of the rate instead of absorbed by the
+     * bias. `0` disables the estimation (the scale error is then only in the process noise,
+     * `gyro_scale_noise`).
+     */
+    double gyro_scale_std;
 } bingham_ahrs_params;
 
 /**
@@ -1773,7 +1785,8 @@ enum bingham_status bingham_ahrs_params_from_rate(double hz, struct bingham_ahrs
 
 /**
  * Creates an AHRS with the parameters `p` (validated: every field finite, periods, noises,
- * thresholds and `bias_std` > 0, `bias_time` and `gyro_scale_noise` ≥ 0, `sample_time` within
+ * thresholds and `bias_std` > 0, `bias_time` and `gyro_scale_noise` ≥ 0, `gyro_scale_std` in
+ * 0..0.05, `sample_time` within
  * 1e-6..1 s (above 1 s the message asks "did you pass a rate in Hz?"), the process noise per
  * step `gyro_noise·sqrt(sample_time)` at least 1e-6 rad).
  *

@@ -267,28 +267,41 @@ fn dropped_samples_are_bridged_in_reverse_as_forward() {
 
 #[test]
 fn without_a_magnetometer_the_tilt_is_smoothed() {
-    let s = simulate(7, 60.0);
-    let p = AhrsParams::new(s.dt);
-    let (qo, _, _) = run_online(&p, &s, false);
-    let r = run_smoother(&p, &s, false, &SmoothOptions::default());
-    // the tilt error: the angle between the true and the estimated "up" in the sensor frame
-    let tilt = |q: &[f64; 4], t: &[f64; 4]| {
-        let a = to_sensor(q, &[0.0, 0.0, 1.0]);
-        let b = to_sensor(t, &[0.0, 0.0, 1.0]);
-        (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]).min(1.0).acos()
-    };
-    let eo = rms(&(0..qo.len())
-        .map(|k| tilt(&qo[k], &s.truth[k]))
-        .collect::<Vec<_>>());
-    let es = rms(&(0..qo.len())
-        .map(|k| tilt(&r.quat[k], &s.truth[k]))
-        .collect::<Vec<_>>());
-    println!(
-        "6-D tilt: online {:.3}°, smoothed {:.3}°",
-        eo.to_degrees(),
-        es.to_degrees()
+    // Sixteen seeds, as in the test above: the smoothed tilt error is 0.64-0.74 of the online
+    // one on most and 0.8-0.96 on a few, which ones moving with rounding-level changes (1 and 5
+    // before the gyroscope's scale state, 12 and 16 with it), so each seed is held to being
+    // better and the mean ratio to the margin (0.70 and 0.71).
+    let mut ratios = Vec::new();
+    for seed in 1u64..=16 {
+        let s = simulate(seed, 60.0);
+        let p = AhrsParams::new(s.dt);
+        let (qo, _, _) = run_online(&p, &s, false);
+        let r = run_smoother(&p, &s, false, &SmoothOptions::default());
+        // the tilt error: the angle between the true and the estimated "up" in the sensor frame
+        let tilt = |q: &[f64; 4], t: &[f64; 4]| {
+            let a = to_sensor(q, &[0.0, 0.0, 1.0]);
+            let b = to_sensor(t, &[0.0, 0.0, 1.0]);
+            (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]).min(1.0).acos()
+        };
+        let eo = rms(&(0..qo.len())
+            .map(|k| tilt(&qo[k], &s.truth[k]))
+            .collect::<Vec<_>>());
+        let es = rms(&(0..qo.len())
+            .map(|k| tilt(&r.quat[k], &s.truth[k]))
+            .collect::<Vec<_>>());
+        println!(
+            "6-D tilt: online {:.3}°, smoothed {:.3}°",
+            eo.to_degrees(),
+            es.to_degrees()
+        );
+        assert!(es < eo, "seed {seed}: smoothed {es} vs online {eo}");
+        ratios.push(es / eo);
+    }
+    let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    assert!(
+        mean < 0.75,
+        "mean smoothed/online tilt error {mean}: {ratios:?}"
     );
-    assert!(es < 0.8 * eo, "smoothed {es} vs online {eo}");
 }
 
 #[test]

@@ -38,13 +38,16 @@ def test_new_parameters_defaults_and_validation():
     assert abs(p.bias_std - math.radians(0.5)) <= 1e-15
     assert math.isfinite(p.gyro_scale_noise) and p.gyro_scale_noise >= 0.0
     for field, bad in (("bias_std", (math.nan, -1.0, 0.0, math.inf)),
-                       ("gyro_scale_noise", (math.nan, -1.0, math.inf))):
+                       ("gyro_scale_noise", (math.nan, -1.0, math.inf)),
+                       ("gyro_scale_std", (math.nan, -1e-3, 0.06, math.inf))):
         for v in bad:
             with pytest.raises(bh.BinghamError) as e:
                 bh.Ahrs(DT, **{field: v})
             assert e.value.status == bh.Status.ERR_INVALID_ARGUMENT
             assert field in e.value.message
     bh.Ahrs(DT, gyro_scale_noise=0.0).close()
+    bh.Ahrs(DT, gyro_scale_std=0.0).close()
+    bh.Ahrs(DT, gyro_scale_std=0.05).close()
 
 
 def test_gyro_bias_covariance_starts_at_bias_std_and_shrinks():

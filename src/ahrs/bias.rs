@@ -1,69 +1,116 @@
-//! The gyroscope bias as a Gaussian coupled to the orientation error, and the process noise it
-//! and the gyroscope put on the orientation.
+//! The gyroscope bias and scale error as a Gaussian coupled to the orientation error, and the
+//! process noise they and the gyroscope put on the orientation.
 //!
-//! Errors are "truth relative to the estimate": the orientation error `θ` is the body-frame
-//! rotation vector with `q_true = q̂ ⊗ exp(θ/2)`, the bias error `e = b_true − b̂` (rad/s, body
-//! frame). With the body-frame increment `R` of a gyroscope sample (body k → body k+1) and the
-//! sample time `dt`, `θ' = Rᵀ θ − dt·e + n` (`n` the gyroscope's own noise). The AHRS keeps
+//! The gyroscope reads `ω_meas = (I + diag s) ω + b + noise`: a bias `b` (rad/s) and a scale
+//! error `s` per axis (relative; misalignment is left to the process noise,
+//! `gyro_scale_noise`). The rate turned by is `ω̂ = ω_meas − b̂ − diag(ŝ) ω_meas` (first order
+//! in `s`, [`BiasState::rate`]). Errors are "truth relative to the estimate": the orientation
+//! error `θ` is the body-frame rotation vector with `q_true = q̂ ⊗ exp(θ/2)`, the calibration
+//! error `e = [b_true − b̂; s_true − ŝ]` (6: rad/s and relative, body frame). With the
+//! body-frame increment `R` of a gyroscope sample (body k → body k+1), the sample time `dt` and
+//! `G = [I, diag(ω)]` (3×6), `θ' = Rᵀ θ − dt·G e + n` (`n` the gyroscope's own noise): a scale
+//! error turns the orientation in proportion to the rate about its axis. The AHRS keeps
 //!
 //! - the marginal of `θ` as the Bingham state (its concentrations give the precision `Λ` of `θ`
 //!   at the mode: `Λ = Σ_i (−z_i/2) u_i u_iᵀ`, `u_i` the vector part of `q̂* ⊗ m_i`);
-//! - `b̂`, `P = Cov(e)` and the cross-covariance `C = Cov(θ, e)` here.
+//! - `b̂`, `ŝ`, `P = Cov(e)` (6×6) and the cross-covariance `C = Cov(θ, e)` (3×6) here.
 //!
-//! Per sample `C ← RᵀC − dt·P`, `P ← P + drift·dt`, and the orientation's covariance grows by
-//! `Q = q·dt·I − dt (RᵀC + CᵀR) + dt² P`: the gyroscope noise plus what the bias's uncertainty
-//! adds. The growth is accumulated (turned into each new body frame) until the next correction,
+//! `P` starts at `diag(bias_std² I, gyro_scale_std² I)`; the bias walks randomly, the scale does
+//! not (a property of the sensor's calibration, changing with temperature far slower than the
+//! bias). With `gyro_scale_std` 0 the scale's rows of `P` and columns of
+//! `C` stay exactly zero and the filter is the bias's alone.
+//!
+//! Per sample `C ← RᵀC − dt·G P`, `P ← P + drift·dt` (the bias block), and the orientation's
+//! covariance grows by `Q = q·dt·I − dt (RᵀC Gᵀ + G CᵀR) + dt² G P Gᵀ`: the gyroscope noise plus
+//! what the bias's and the scale's uncertainty add. The growth is accumulated (turned into each new body frame) until the next correction,
 //! where the Bingham state is composed with a noise of that covariance. After a Bayes update
 //! that moved the mode by `μ` (body frame of the prior mode) the Gaussian conditioning on `θ`
-//! gives, exactly for a Gaussian joint, `b̂ ← b̂ + CᵀΛ⁻μ`, `P ← P − CᵀΛ⁻C + KᵀΣ⁺K` and
-//! `C ← Σ⁺K`, `K = Λ⁻C`, `Σ⁺` the (pseudo-)inverse of the posterior precision. This is a
-//! Kalman filter of the bias driven by the same corrections the Bingham state makes; its gain
-//! comes from the covariances, so a large bias is learned in seconds of motion and the
-//! orientation's spread includes what the bias's uncertainty adds.
+//! gives, exactly for a Gaussian joint, `[b̂; ŝ] ← [b̂; ŝ] + CᵀΛ⁻μ`, `P ← P − CᵀΛ⁻C + KᵀΣ⁺K`
+//! and `C ← Σ⁺K`, `K = Λ⁻C`, `Σ⁺` the (pseudo-)inverse of the posterior precision. This is a
+//! Kalman filter of the bias and the scale driven by the same corrections the Bingham state
+//! makes; its gain comes from the covariances, so a large bias is learned in seconds of motion,
+//! the scale wherever the rate about an axis changes (a constant rate shows only `b + s·ω`),
+//! and the orientation's spread includes what their uncertainty adds. At rest the gyroscope
+//! measures the bias alone (`H = [I 0]`, [`BiasState::rest`]).
 
-use nalgebra::{Matrix3, Matrix4, SymmetricEigen, Vector3, Vector4};
+use nalgebra::{Matrix3, Matrix4, Matrix6, SMatrix, SymmetricEigen, Vector3, Vector4};
 
 use crate::quaternion::q4;
+
+/// The orientation error's cross-covariance with `[b; s]` (3×6).
+pub(super) type Matrix3x6 = SMatrix<f64, 3, 6>;
+
+/// The largest gyroscope scale error (per axis, relative) the estimate may reach: 5 %, above
+/// the 0.5–3 % that consumer MEMS gyroscopes state at turn-on.
+pub(super) const SCALE_MAX: f64 = 0.05;
 
 /// The bias estimate with its covariance and its coupling to the orientation error.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct BiasState {
     /// `b̂` (rad/s, body frame).
     pub(super) b: Vector3<f64>,
-    /// `P = Cov(b_true − b̂)` ((rad/s)²).
-    pub(super) p: Matrix3<f64>,
-    /// `C = Cov(θ, b_true − b̂)` (rad²/s), body frame of the current sample.
-    pub(super) c: Matrix3<f64>,
+    /// `ŝ`, the gyroscope's scale error per axis (relative: `ω_meas = (I + diag s) ω + b`).
+    pub(super) s: Vector3<f64>,
+    /// `P = Cov([b_true − b̂; s_true − ŝ])` (bias block (rad/s)², scale block relative²).
+    pub(super) p: Matrix6<f64>,
+    /// `C = Cov(θ, [b_true − b̂; s_true − ŝ])`, body frame of the current sample.
+    pub(super) c: Matrix3x6,
     /// The orientation covariance added since the last correction (rad², current body frame).
     pub(super) pending: Matrix3<f64>,
 }
 
 impl BiasState {
-    /// No bias, standard deviation `std` (rad/s) per axis, no coupling.
-    pub(super) fn new(std: f64) -> BiasState {
+    /// No bias, standard deviation `std` (rad/s) per axis; no scale error, standard deviation
+    /// `scale_std` per axis (0: the scale is not estimated); no coupling.
+    pub(super) fn new(std: f64, scale_std: f64) -> BiasState {
+        let mut p = Matrix6::zeros();
+        for i in 0..3 {
+            p[(i, i)] = std * std;
+            p[(i + 3, i + 3)] = scale_std * scale_std;
+        }
         BiasState {
             b: Vector3::zeros(),
-            p: Matrix3::identity() * (std * std),
-            c: Matrix3::zeros(),
+            s: Vector3::zeros(),
+            p,
+            c: Matrix3x6::zeros(),
             pending: Matrix3::zeros(),
         }
     }
 
-    /// One gyroscope sample: `r` the rotation matrix of the body increment, `q` the gyroscope's
-    /// own noise added to the orientation (rad², isotropic), `drift` the bias's random-walk
-    /// variance added ((rad/s)²).
-    pub(super) fn predict(&mut self, r: &Matrix3<f64>, dt: f64, q: f64, drift: f64) {
+    /// The rate `g` (rad/s) with the bias and the scale error taken out:
+    /// `ω̂ = g − b̂ − diag(ŝ) g`.
+    pub(super) fn rate(&self, g: &[f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|j| g[j] - self.b[j] - self.s[j] * g[j])
+    }
+
+    /// The bias covariance alone (the first 3×3 block of `P`).
+    pub(super) fn bias_covariance(&self) -> Matrix3<f64> {
+        self.p.fixed_view::<3, 3>(0, 0).into_owned()
+    }
+
+    /// One gyroscope sample: `r` the rotation matrix of the body increment, `w` the rate
+    /// (rad/s; the scale error's effect on the orientation is `diag(w)` times it), `q` the
+    /// gyroscope's own noise added to the orientation (rad², isotropic), `drift` the bias's
+    /// random-walk variance added ((rad/s)²; the scale does not walk).
+    pub(super) fn predict(&mut self, r: &Matrix3<f64>, w: &[f64; 3], dt: f64, q: f64, drift: f64) {
         let rt = r.transpose();
         let rc = rt * self.c;
-        let coupling = -(rc + rc.transpose()) * dt + self.p * (dt * dt);
+        // G = [I, diag(w)]: θ' = Rᵀθ − dt·G e
+        let p = &self.p;
+        let gp = Matrix3x6::from_fn(|i, j| p[(i, j)] + w[i] * p[(i + 3, j)]);
+        let rcg = Matrix3::from_fn(|i, j| rc[(i, j)] + w[j] * rc[(i, j + 3)]);
+        let gpg = Matrix3::from_fn(|i, j| gp[(i, j)] + w[j] * gp[(i, j + 3)]);
+        let coupling = -(rcg + rcg.transpose()) * dt + gpg * (dt * dt);
         self.pending = rt * self.pending * r + coupling + Matrix3::identity() * q;
         // beyond a few rad² the noise is uniform anyway (see `noise_moment`): keep it finite
         let tr = self.pending.trace();
         if tr > 3.0 {
             self.pending *= 3.0 / tr;
         }
-        self.c = rc - self.p * dt;
-        self.p += Matrix3::identity() * drift;
+        self.c = rc - gp * dt;
+        for i in 0..3 {
+            self.p[(i, i)] += drift;
+        }
     }
 
     /// The pending covariance made positive semi-definite (negative parts, which the coupling
@@ -89,39 +136,86 @@ impl BiasState {
             return;
         }
         let k = lam_prior * self.c;
-        self.b += k.transpose() * mu;
+        let dx = k.transpose() * mu;
+        self.b += dx.fixed_rows::<3>(0);
+        self.s += dx.fixed_rows::<3>(3);
         let p = self.p - self.c.transpose() * k + k.transpose() * sigma_post * k;
-        self.p = psd(&p);
+        self.p = psd6(&p);
         self.c = sigma_post * k;
     }
 
     /// A direct measurement `y` of the bias at rest (rad/s) with variance `r` ((rad/s)² per
-    /// axis): the Kalman update `K = P (P + r I)⁻¹`, `b̂ ← b̂ + K (y − b̂)`, `P ← (I − K) P`,
-    /// `C ← C (I − K)ᵀ` (the bias error becomes `(I − K) e − K v`).
+    /// axis), `H = [I 0]` (at rest the scale error has no rate to act on): the Kalman update
+    /// `K = P Hᵀ (H P Hᵀ + r I)⁻¹`, `[b̂; ŝ] += K (y − b̂)`, `P ← (I − K H) P`,
+    /// `C ← C (I − K H)ᵀ` (the error becomes `(I − K H) e − K v`).
     pub(super) fn rest(&mut self, y: &Vector3<f64>, r: f64) {
-        let Some(s_inv) = (self.p + Matrix3::identity() * r).try_inverse() else {
+        let Some(s_inv) = (self.bias_covariance() + Matrix3::identity() * r).try_inverse() else {
             return;
         };
-        let k = self.p * s_inv;
-        self.b += k * (y - self.b);
-        let ik = Matrix3::identity() - k;
-        self.p = psd(&(ik * self.p));
-        self.c *= ik.transpose();
+        // P Hᵀ: the first three columns of P
+        let k = self.p.fixed_columns::<3>(0) * s_inv;
+        let dx = k * (y - self.b);
+        self.b += dx.fixed_rows::<3>(0);
+        self.s += dx.fixed_rows::<3>(3);
+        // (I − K H) P = P − K P[0..3, :]
+        let p = self.p - k * self.p.fixed_rows::<3>(0);
+        self.p = psd6(&p);
+        // C (I − K H)ᵀ = C − C[:, 0..3] Kᵀ
+        self.c -= self.c.fixed_columns::<3>(0) * k.transpose();
     }
 
     /// Forgets the coupling of the bias to the orientation error (`C = 0`): what a correction
     /// that did not teach the bias taught the orientation must not reach the bias through the
     /// next corrections (module `ahrs`, the recovery rule).
     pub(super) fn decouple(&mut self) {
-        self.c = Matrix3::zeros();
+        self.c = Matrix3x6::zeros();
     }
 
-    /// The estimate clipped to `±max` per axis.
+    /// The bias estimate clipped to `±max` per axis, the scale's to `±SCALE_MAX`.
     pub(super) fn clip(&mut self, max: f64) {
         for v in self.b.iter_mut() {
             *v = v.clamp(-max, max);
         }
+        for v in self.s.iter_mut() {
+            *v = v.clamp(-SCALE_MAX, SCALE_MAX);
+        }
     }
+
+    /// The bias block of `P` (and its coupling to the scale) scaled so that its trace is at
+    /// most `cap`: rows and columns `0..3` times `√(cap/tr)`, which keeps `P` positive
+    /// semi-definite.
+    pub(super) fn cap_bias(&mut self, cap: f64) {
+        let tr = self.p[(0, 0)] + self.p[(1, 1)] + self.p[(2, 2)];
+        if tr > cap {
+            let f = (cap / tr).sqrt();
+            for i in 0..3 {
+                self.p.row_mut(i).scale_mut(f);
+                self.p.column_mut(i).scale_mut(f);
+            }
+        }
+    }
+}
+
+/// [`psd`] for the 6×6 covariance of the bias and the scale: symmetrized, negative eigenvalues
+/// raised to zero; a matrix with a Cholesky factor (the common case) without an eigensolve,
+/// one without a scale part (the scale not estimated: its rows zero) as the bias block alone.
+pub(super) fn psd6(a: &Matrix6<f64>) -> Matrix6<f64> {
+    let s = (a + a.transpose()) * 0.5;
+    if s.fixed_rows::<3>(3).iter().all(|&v| v == 0.0) {
+        let mut out = Matrix6::zeros();
+        out.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&psd(&s.fixed_view::<3, 3>(0, 0).into_owned()));
+        return out;
+    }
+    if s.cholesky().is_some() {
+        return s;
+    }
+    let e = SymmetricEigen::new(s);
+    if e.eigenvalues.iter().all(|&v| v >= 0.0) {
+        return s;
+    }
+    let l = e.eigenvalues.map(|v| v.max(0.0));
+    e.eigenvectors * Matrix6::from_diagonal(&l) * e.eigenvectors.transpose()
 }
 
 /// `a` symmetrized with negative eigenvalues raised to zero. A positive definite `a` (all
@@ -376,10 +470,10 @@ mod tests {
     fn a_bias_error_is_learned_from_the_corrections_it_causes() {
         // 1-axis check through the 3-D algebra: a constant bias error drifts θ; a perfect
         // measurement of θ then moves b̂ by CᵀΛμ.
-        let mut s = BiasState::new(0.01);
+        let mut s = BiasState::new(0.01, 0.0);
         let dt = 0.01;
         for _ in 0..100 {
-            s.predict(&Matrix3::identity(), dt, 1e-8, 0.0);
+            s.predict(&Matrix3::identity(), &[0.0; 3], dt, 1e-8, 0.0);
         }
         // C = −t·P after t = 1 s without rotation
         assert!((s.c[(0, 0)] + 1.0 * 1e-4).abs() < 1e-9);
@@ -398,6 +492,66 @@ mod tests {
         // b̂ = Cov(e,θ)/Var(θ)·θ = (−1e-4/1.01e-4)·(−0.005)
         assert!((s.b[0] - 0.005 / 1.01).abs() < 1e-9);
         assert!(s.p[(0, 0)] < 1e-4 * 0.02);
+    }
+
+    #[test]
+    fn a_scale_error_is_learned_from_the_corrections_it_causes() {
+        // a constant rotation at w rad/s about x for t = 1 s: a scale error s turns θ_x by
+        // −t·w·s; the rotation about x leaves θ_x's row apart from y and z, so the x-axis
+        // algebra is scalar: C = −t·[σ_b², w σ_s²] (bias, scale), Var θ_x = q t + t²(σ_b² +
+        // w² σ_s²), and a perfect measurement θ_x = μ moves [b̂, ŝ] by C/Var·μ
+        let (sb, ss, w, dt) = (0.01, 0.01, 2.0, 0.01);
+        let mut st = BiasState::new(sb, ss);
+        let dq = q4::from_rotation_vector(&[w * dt, 0.0, 0.0]);
+        let r = q4::to_matrix(&dq);
+        let r = Matrix3::from_fn(|i, j| r[i][j]);
+        for _ in 0..100 {
+            st.predict(&r, &[w, 0.0, 0.0], dt, 1e-8, 0.0);
+        }
+        assert!((st.c[(0, 0)] + sb * sb).abs() < 1e-12, "{}", st.c);
+        assert!((st.c[(0, 3)] + w * ss * ss).abs() < 1e-12, "{}", st.c);
+        let n = st.take_pending();
+        let var = 1e-6 + sb * sb + w * w * ss * ss;
+        assert!((n[(0, 0)] - var).abs() < 1e-12, "{n}");
+        // true scale error 0.5 %, no bias error: θ_x = −t·w·s
+        let s_true = 0.005;
+        let mu = Vector3::new(-w * s_true, 0.0, 0.0);
+        st.correct(&pinv(&n), &mu, &(Matrix3::identity() * 1e-10), true);
+        let want_s = w * w * ss * ss / var * s_true;
+        let want_b = sb * sb / var * w * s_true;
+        assert!((st.s[0] - want_s).abs() < 1e-9, "{} vs {want_s}", st.s[0]);
+        assert!((st.b[0] - want_b).abs() < 1e-9, "{} vs {want_b}", st.b[0]);
+        assert!(st.s[1].abs() < 1e-15 && st.s[2].abs() < 1e-15);
+        // the rate then has the scale and the bias taken out: ω̂ = g − b̂ − ŝ g
+        let g = [w * (1.0 + s_true), 0.0, 0.0];
+        let got = st.rate(&g)[0];
+        assert!((got - (g[0] - want_b - want_s * g[0])).abs() < 1e-15);
+        // the variance of the scale error along x shrank by the share the correction explained
+        let p_ss = ss * ss - (w * ss * ss) * (w * ss * ss) / var;
+        assert!((st.p[(3, 3)] - p_ss).abs() < 1e-9, "{}", st.p[(3, 3)]);
+    }
+
+    #[test]
+    fn without_a_scale_prior_the_scale_stays_zero_and_out_of_the_algebra() {
+        let dt = 0.01;
+        let dq = q4::from_rotation_vector(&[0.02, -0.01, 0.03]);
+        let r = q4::to_matrix(&dq);
+        let r = Matrix3::from_fn(|i, j| r[i][j]);
+        let mut st = BiasState::new(0.01, 0.0);
+        for _ in 0..50 {
+            st.predict(&r, &[2.0, -1.0, 3.0], dt, 1e-8, 1e-9);
+        }
+        let n = st.take_pending();
+        st.correct(
+            &pinv(&n),
+            &Vector3::new(0.001, -0.002, 0.0005),
+            &(Matrix3::identity() * 1e-8),
+            true,
+        );
+        st.rest(&Vector3::new(0.01, 0.0, 0.0), 1e-6);
+        assert_eq!(st.s, Vector3::zeros());
+        assert!(st.p.fixed_rows::<3>(3).iter().all(|&v| v == 0.0));
+        assert!(st.c.fixed_columns::<3>(3).iter().all(|&v| v == 0.0));
     }
 
     #[test]

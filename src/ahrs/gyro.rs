@@ -1,8 +1,9 @@
 //! The gyroscope in the AHRS (step 2 of the module `ahrs`): the exact turn of the state by the
 //! bias-corrected rate, the process noise accumulated, and gaps.
 //!
-//! - **The turn.** The state is turned by the body-frame increment of the bias-corrected rate,
-//!   `q ← q ⊗ exp((ω − b̂)·dt/2)`.
+//! - **The turn.** The state is turned by the body-frame increment of the rate with the bias
+//!   and the scale error taken out, `q ← q ⊗ exp(ω̂·dt/2)`, `ω̂ = ω − b̂ − diag(ŝ) ω` (module
+//!   `bias`).
 //! - **The process noise** of the sample, `(gyro_noise² + (gyro_scale_noise·|ω − b̂|)²)·h`, and
 //!   what the bias's uncertainty adds through its coupling (module `bias`), accumulated until
 //!   the next correction; the bias's random walk, held over a rest (module `rest`).
@@ -55,7 +56,8 @@ pub(super) struct Turn {
 
 impl Gyro {
     /// The increment of a sample `h` seconds after the previous one with the raw rate `gyr`
-    /// (rad/s; `None`: a gap, the last rate held), the bias `b` taken out: what [`Gyro::step`]
+    /// (rad/s; `None`: a gap, the last rate held), the bias and scale error of `cal` taken out
+    /// ([`BiasState::rate`]): what [`Gyro::step`]
     /// turns the state by. With `far` (a pass over reversed time, module `smoother`: the raw
     /// rate on the far side of the interval, the sample before it in recorded time) the
     /// sample's own period comes first and the rest of a longer interval is bridged with the
@@ -65,7 +67,7 @@ impl Gyro {
     fn increment(
         &self,
         dt: f64,
-        b: &[f64; 3],
+        cal: &BiasState,
         h: f64,
         gyr: Option<&[f64; 3]>,
         far: Option<&[f64; 3]>,
@@ -75,11 +77,12 @@ impl Gyro {
         // rate (module `timing`).
         let (omega, bridged, held) = match gyr {
             Some(g) => {
-                let omega = [g[0] - b[0], g[1] - b[1], g[2] - b[2]];
+                let omega = cal.rate(g);
                 if h > 1.5 * dt {
                     let bridge = match far {
                         Some(f) if f.iter().all(|x| x.is_finite()) => {
-                            std::array::from_fn(|j| 0.5 * (omega[j] + (f[j] - b[j])))
+                            let f = cal.rate(f);
+                            std::array::from_fn(|j| 0.5 * (omega[j] + f[j]))
                         }
                         Some(_) => omega,
                         None => self.hold.bridge(&omega),
@@ -116,12 +119,12 @@ impl Gyro {
     pub(super) fn preview(
         &self,
         p: &AhrsParams,
-        b: &[f64; 3],
+        cal: &BiasState,
         h: f64,
         gyr: Option<&[f64; 3]>,
         far: Option<&[f64; 3]>,
     ) -> [f64; 4] {
-        self.increment(p.sample_time, b, h, gyr, far).0
+        self.increment(p.sample_time, cal, h, gyr, far).0
     }
 
     /// One sample `h` seconds after the previous one (step 2), `gyr` (rad/s; `None`: a gap,
@@ -141,8 +144,7 @@ impl Gyro {
         far: Option<&[f64; 3]>,
     ) -> Turn {
         let dt = p.sample_time;
-        let b = bias.b;
-        let (dq, omega, covered, held) = self.increment(dt, &[b[0], b[1], b[2]], h, gyr, far);
+        let (dq, omega, covered, held) = self.increment(dt, bias, h, gyr, far);
         let rate = norm3(&omega);
         core.rotate(&dq);
         // The carried rate's error grows with the whole stretch without a gyroscope sample, not
@@ -164,7 +166,7 @@ impl Gyro {
             self.gap_var = 0.0;
         }
         if let Some(g) = gyr {
-            self.hold.push(&[g[0] - b[0], g[1] - b[1], g[2] - b[2]], h);
+            self.hold.push(&bias.rate(g), h);
         }
         // the turn the latency compensation extrapolates: the rate over one nominal period
         let w_lead = scale3(&omega, dt);
@@ -191,12 +193,9 @@ impl Gyro {
             rest.held = 0.0;
         }
         let r = q4::to_matrix(&dq);
-        bias.predict(&Matrix3::from_fn(|i, j| r[i][j]), h, q, drift);
+        bias.predict(&Matrix3::from_fn(|i, j| r[i][j]), &omega, h, q, drift);
         // the estimate is clipped to ±bias_max: its variance need not grow beyond (2·bias_max)²
-        let cap = 3.0 * 4.0 * p.bias_max * p.bias_max;
-        if bias.p.trace() > cap {
-            bias.p *= cap / bias.p.trace();
-        }
+        bias.cap_bias(3.0 * 4.0 * p.bias_max * p.bias_max);
         Turn {
             dq,
             w_lead,
@@ -225,15 +224,17 @@ mod tests {
             let mut fwd = Gyro::default();
             fwd.hold
                 .push(&std::array::from_fn(|j| before[j] - b[j]), dt);
-            let (dq_f, ..) = fwd.increment(dt, &b, h, Some(&after), None);
+            let mut cal = BiasState::new(0.0, 0.0);
+            cal.b = b.into();
+            let (dq_f, ..) = fwd.increment(dt, &cal, h, Some(&after), None);
             // reversed time: the last rate is the inverted `next` (the sample after `after`),
             // then the inverted `after` with `before` on the far side, inverted, bias
             // negated (the backward pass's rates are `b − gyr`)
             let inv = |v: &[f64; 3]| -> [f64; 3] { std::array::from_fn(|j| -v[j]) };
             let mut back = Gyro::default();
             back.hold.push(&inv(&next), dt);
-            let (dq_b, ..) =
-                back.increment(dt, &inv(&b), h, Some(&inv(&after)), Some(&inv(&before)));
+            cal.b = inv(&b).into();
+            let (dq_b, ..) = back.increment(dt, &cal, h, Some(&inv(&after)), Some(&inv(&before)));
             let id = q4::mul(&dq_f, &dq_b);
             assert!(
                 (id[0].abs() - 1.0).abs() < 1e-15 && id[1..].iter().all(|x| x.abs() < 1e-15),

@@ -25,9 +25,10 @@
 //!    bias, their spread the gyroscope's noise: a Kalman step of the bias with their mean (in
 //!    half-second blocks, the edges of the phase left out).
 //! 2. **Gyroscope** (module `gyro`). The state is turned exactly by the body-frame increment of
-//!    the bias-corrected rate, `q ← q ⊗ Δq`; the process noise of the sample —
-//!    `gyro_noise²·dt`, `(gyro_scale_noise·|ω|)²·dt`, what a gap's carried rate cannot know, and
-//!    what the bias's uncertainty adds through its coupling (module `bias`) — is accumulated.
+//!    the rate with the bias and the scale error taken out, `q ← q ⊗ Δq`; the process noise of
+//!    the sample — `gyro_noise²·dt`, `(gyro_scale_noise·|ω|)²·dt`, what a gap's carried rate
+//!    cannot know, and what the bias's and the scale's uncertainty add through their coupling
+//!    (module `bias`) — is accumulated.
 //! 3. **Accelerometer** (module `accel`; skipped for a non-finite sample or
 //!    `|acc| < gravity/4`): low-passed in the gyroscope-integrated frame (second-order
 //!    Butterworth, `acc_tau`), where gravity stands still and linear accelerations average out.
@@ -44,8 +45,8 @@
 //!    4. the health readout scores every item's innovation against the prior (module
 //!       `health`);
 //!    5. one exact Bayes product with every item's exponent;
-//!    6. the bias learned from the move of the mode (module `bias`), unless at rest or
-//!       recovering from a large error;
+//!    6. the bias (and the scale error) learned from the move of the mode (module `bias`),
+//!       unless at rest or recovering from a large error;
 //!    7. the field's average turned with the heading correction (module `magnetic`).
 //!
 //!    The evidence is per second: `κ_a = T/(acc_noise²·acc_tau)` for a period `T` (divided by
@@ -374,12 +375,19 @@ impl Ahrs {
         [b[0], b[1], b[2]]
     }
 
+    /// The gyroscope scale-error estimate (relative, per sensor axis: the gyroscope reads
+    /// `(1 + s_i)` times the rate about axis `i`, plus the bias); zero when `gyro_scale_std` is 0.
+    pub fn gyro_scale(&self) -> [f64; 3] {
+        let s = &self.sample_state.bias.s;
+        [s[0], s[1], s[2]]
+    }
+
     /// The covariance of the gyroscope bias estimate ((rad/s)², 3×3 row-major, sensor frame):
     /// starts at `bias_std²·I`, shrinks as the corrections (and rests) teach the bias, grows
     /// by `bias_std²/bias_time` per second (over a rest the growth is held, and a third of it is
     /// added when the rest ends).
     pub fn gyro_bias_covariance(&self) -> [f64; 9] {
-        let p = &self.sample_state.bias.p;
+        let p = &self.sample_state.bias.bias_covariance();
         let mut out = [0.0; 9];
         for i in 0..3 {
             for j in 0..3 {
@@ -484,11 +492,13 @@ impl Ahrs {
             return q;
         }
         let gyr = gyr.iter().all(|x| x.is_finite()).then_some(gyr);
-        let b = self.gyro_bias();
-        let dq = self
-            .sample_state
-            .gyro
-            .preview(&self.params, &b, self.snap(dt), gyr, Some(far));
+        let dq = self.sample_state.gyro.preview(
+            &self.params,
+            &self.sample_state.bias,
+            self.snap(dt),
+            gyr,
+            Some(far),
+        );
         q4::mul(&q, &dq)
     }
 
@@ -608,11 +618,7 @@ impl Ahrs {
         // without a gyroscope sample the rate is taken as zero (the sensor at rest)
         let gyr = gyr.unwrap_or(&[0.0; 3]);
         // the latency compensation of `update`, with the rate of this sample
-        let b = self.gyro_bias();
-        let w = scale3(
-            &[gyr[0] - b[0], gyr[1] - b[1], gyr[2] - b[2]],
-            p.sample_time,
-        );
+        let w = scale3(&self.sample_state.bias.rate(gyr), p.sample_time);
         let acc = turn_forward(acc_raw, &w, c.acc_lead);
         let mag = mag.map(|m| turn_forward(m, &w, c.mag_lead));
         let an = norm3(&acc);

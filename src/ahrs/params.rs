@@ -1,6 +1,10 @@
 //! The AHRS parameters: their meaning, units, the tuned defaults and their validation.
 
+use super::bias::SCALE_MAX;
 use crate::error::{Error, Result};
+
+/// The default `gyro_scale_std` (see [`AhrsParams::gyro_scale_std`]).
+const GYRO_SCALE_STD: f64 = 0.001;
 
 /// The smallest sampling period (s) the AHRS accepts.
 pub const MIN_SAMPLE_TIME: f64 = 1e-6;
@@ -124,6 +128,16 @@ pub struct AhrsParams {
     /// axis-misalignment errors, and residual latency, turn into angle errors in proportion
     /// to the rate).
     pub gyro_scale_noise: f64,
+    /// Initial standard deviation (relative, per axis, 0 to 0.05) of the gyroscope's scale
+    /// error: the gyroscope reads `(1 + s_i)` times the rate about its axis `i` (plus the
+    /// bias), and the Kalman filter of the bias estimates `s` with it from the same
+    /// corrections (module `bias`; `Ahrs::gyro_scale`), starting from 0 with this
+    /// uncertainty and holding it constant (no random walk: a scale error is a property of
+    /// the sensor's calibration). A rate-proportional heading drift (a fast spin while the
+    /// magnetometer is rejected) is then taken out of the rate instead of absorbed by the
+    /// bias. `0` disables the estimation (the scale error is then only in the process noise,
+    /// `gyro_scale_noise`).
+    pub gyro_scale_std: f64,
 }
 
 impl AhrsParams {
@@ -154,6 +168,7 @@ impl AhrsParams {
             acc_latency: 0.0,
             bias_std: 0.5f64.to_radians(),
             gyro_scale_noise: 0.004,
+            gyro_scale_std: GYRO_SCALE_STD,
         }
     }
 
@@ -252,6 +267,12 @@ impl AhrsParams {
             return Err(Error::InvalidArgument(format!(
                 "AHRS parameter `bias_time` must be finite and >= 0, got {}",
                 self.bias_time
+            )));
+        }
+        if !(self.gyro_scale_std.is_finite() && (0.0..=SCALE_MAX).contains(&self.gyro_scale_std)) {
+            return Err(Error::InvalidArgument(format!(
+                "AHRS parameter `gyro_scale_std` must lie in [0, {SCALE_MAX}], got {}",
+                self.gyro_scale_std
             )));
         }
         if !(self.gyro_scale_noise.is_finite() && self.gyro_scale_noise >= 0.0) {

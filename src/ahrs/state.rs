@@ -41,7 +41,7 @@ impl SampleState {
     /// The state before the first sample, with the parameters `p` and their coefficients `c`.
     pub(super) fn new(p: &AhrsParams, c: &Coeffs) -> SampleState {
         SampleState {
-            bias: BiasState::new(p.bias_std),
+            bias: BiasState::new(p.bias_std, p.gyro_scale_std),
             rest: Rest::default(),
             gyro: Gyro::default(),
             accel: Accel::new(c, &[0.0; 3]),

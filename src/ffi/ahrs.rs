@@ -92,7 +92,8 @@ pub unsafe extern "C" fn bingham_ahrs_params_from_rate(
 }
 
 /// Creates an AHRS with the parameters `p` (validated: every field finite, periods, noises,
-/// thresholds and `bias_std` > 0, `bias_time` and `gyro_scale_noise` ≥ 0, `sample_time` within
+/// thresholds and `bias_std` > 0, `bias_time` and `gyro_scale_noise` ≥ 0, `gyro_scale_std` in
+/// 0..0.05, `sample_time` within
 /// 1e-6..1 s (above 1 s the message asks "did you pass a rate in Hz?"), the process noise per
 /// step `gyro_noise·sqrt(sample_time)` at least 1e-6 rad).
 ///
