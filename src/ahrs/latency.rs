@@ -324,7 +324,7 @@ impl LatencyEstimator {
     /// convex there.
     fn fit(&self) -> Option<(f64, usize, f64)> {
         let w = self.window;
-        // s(j) for j = 0 … W, from sums[W − j]: formed once (the AHRS fits after most pushes)
+        // s(j) for j = 0 … W, from sums[W − j], formed once per fit
         let mut s = [0.0; RING];
         for (j, v) in s[..=w].iter_mut().enumerate() {
             *v = 0.5 * (self.sums[0][w - j] + self.sums[1][w - j]);
@@ -401,17 +401,12 @@ fn accumulate_lags(
     inv_n2: f64,
     a: f64,
 ) {
-    // indexed over slices of one length (no bounds checks in the loop, which the compiler
-    // then vectorizes: the lags are independent)
-    let n = sums.len();
-    let (rx, ry, rz) = (&rx[..n], &ry[..n], &rz[..n]);
-    for i in 0..n {
-        let (x, y, z) = (rx[i], ry[i], rz[i]);
+    for (((s, &x), &y), &z) in sums.iter_mut().zip(rx).zip(ry).zip(rz) {
         let r0 = d[0] + (y * m[2] - z * m[1]);
         let r1 = d[1] + (z * m[0] - x * m[2]);
         let r2 = d[2] + (x * m[1] - y * m[0]);
         let e = (r0 * r0 + r1 * r1 + r2 * r2) * inv_n2;
-        sums[i] += a * (e - sums[i]);
+        *s += a * (e - *s);
     }
 }
 
