@@ -2039,8 +2039,8 @@ enum bingham_status bingham_ahrs_angular_spread(const struct bingham_ahrs *a, do
  * near 1 for long: the magnetometer is disturbed or its axes are wrong. `mag_dip` of the
  * wrong sign for the place (negative north of the magnetic equator): the accelerometer's
  * (or magnetometer's) sign is flipped, which no other signal shows. Definitions in
- * docs/guide.md ("Health readout"). All zero before the first correction (20 ms after the
- * first sample).
+ * docs/guide.md ("Health readout"). All zero before the first correction (one correction
+ * period, 50 ms, after the first sample).
  *
  * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `out`). On error `*out` is not written.
  *
