@@ -52,7 +52,7 @@
 /**
  * Minor version of the header.
  */
-#define BINGHAM_VERSION_MINOR 4
+#define BINGHAM_VERSION_MINOR 5
 
 /**
  * Patch version of the header.

@@ -81,9 +81,9 @@ class AhrsParams(ctypes.Structure):
     gyroscope (see :meth:`Ahrs.mag_latency_estimate`); ``bias_std`` (rad/s, > 0, default
     0.5°/s): the initial standard deviation per axis of the gyroscope bias (see
     :meth:`Ahrs.gyro_bias_covariance`); ``gyro_scale_noise`` (√s, >= 0, default 0.004): process
-    noise per rad/s of rotation rate; ``gyro_scale_std`` (relative, 0 to 0.05): the initial
-    standard deviation per axis of the gyroscope's scale error, estimated with the bias (0:
-    not estimated)."""
+    noise per rad/s of rotation rate; ``gyro_scale_std`` (relative, 0 to 0.05, default 0.001):
+    the initial standard deviation per axis of the gyroscope's scale error, estimated with the
+    bias (0: not estimated)."""
 
     _fields_ = [
         ("sample_time", ctypes.c_double),

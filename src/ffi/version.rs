@@ -6,7 +6,7 @@ use std::os::raw::c_char;
 /// header/library mismatch.
 pub const BINGHAM_VERSION_MAJOR: u32 = 0;
 /// Minor version of the header.
-pub const BINGHAM_VERSION_MINOR: u32 = 4;
+pub const BINGHAM_VERSION_MINOR: u32 = 5;
 /// Patch version of the header.
 pub const BINGHAM_VERSION_PATCH: u32 = 0;
 
