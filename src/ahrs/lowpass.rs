@@ -61,10 +61,9 @@ pub(super) struct Coeffs {
 /// evidence is worth the time its samples cover: the period only sets how often the evidence
 /// is applied. The corrections act on time scales of a second and longer (the averages'
 /// `acc_tau` and `mag_tau`, the bias), so the period adds a delay of half a period to
-/// them: 50 ms steps gave the same errors as 20 ms steps to the third decimal on the BROAD
-/// trials and the simulated suite, and the first figure to move was at 200 ms (BROAD trial
-/// 34's fast spins, 1.98° → 2.21°; docs/accuracy/ahrs.md, "The correction period"). A
-/// correction costs 4–6 times a sample's prediction, so the period sets the cost per sample at
+/// them. 50 ms is a quarter of the shortest period measured to cost accuracy (the table in
+/// docs/accuracy/ahrs.md, "The correction period"); a correction costs several times a
+/// sample's prediction (docs/speed.md, "round five"), so the period sets the cost per sample at
 /// the rates where it spans few samples (every third sample at 50 Hz).
 pub const CORRECTION_PERIOD: f64 = 0.05;
 
