@@ -2061,6 +2061,21 @@ enum bingham_status bingham_ahrs_health(const struct bingham_ahrs *a,
 enum bingham_status bingham_ahrs_gyro_bias(const struct bingham_ahrs *a, double *bias);
 
 /**
+ * The gyroscope scale-error estimate (relative, per sensor axis): the gyroscope reads
+ * `(1 + scale[i])` times the rate about its axis `i` (plus the bias); the AHRS turns the state
+ * by `gyr − bias − scale ∘ gyr` (componentwise). Estimated with the bias from the corrections
+ * during rotation, starting from 0 with the standard deviation `gyro_scale_std` (see
+ * `bingham_ahrs_params`; default 0.001, i.e. 0.1 %) and never walking; exactly 0 when
+ * `gyro_scale_std` is 0. Each component stays within ±0.05.
+ *
+ * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `scale`). On error nothing is written.
+ *
+ * # Safety
+ * `a`: a live handle; `scale`: 3 writable doubles.
+ */
+enum bingham_status bingham_ahrs_gyro_scale(const struct bingham_ahrs *a, double *scale);
+
+/**
  * The covariance of the gyroscope bias estimate, in (rad/s)², sensor frame: a 3×3 matrix
  * written row-major into `cov` (9 doubles; `cov[3*i + j]` is the covariance of the bias
  * components i and j), symmetric positive semi-definite. The square roots of its diagonal

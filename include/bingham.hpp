@@ -1359,6 +1359,14 @@ public:
         detail::check(bingham_ahrs_gyro_bias(a_, b.data()));
         return b;
     }
+    /// The gyroscope scale-error estimate (relative, per sensor axis: the gyroscope reads
+    /// (1 + s_i) times the rate about axis i, plus the bias); zeros when gyro_scale_std is 0.
+    std::array<double, 3> gyro_scale() const {
+        require("bingham::Ahrs::gyro_scale");
+        std::array<double, 3> s{};
+        detail::check(bingham_ahrs_gyro_scale(a_, s.data()));
+        return s;
+    }
     /// The covariance of the gyroscope bias estimate ((rad/s)^2, sensor frame): 3 x 3 ROW-MAJOR,
     /// symmetric positive semi-definite; bias_std^2 * I on creation.
     std::array<double, 9> gyro_bias_covariance() const {

@@ -124,6 +124,7 @@ _SIGNATURES = {
     "bingham_ahrs_angular_spread": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_gyro_bias": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_gyro_bias_covariance": (_STATUS, [ctypes.c_void_p, _D]),
+    "bingham_ahrs_gyro_scale": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_orientation_covariance": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_ahrs_mag_latency_estimate": (_STATUS, [ctypes.c_void_p, _D]),
     "bingham_spin_filter_new": (_STATUS, [_D, _D, _D, _D, ctypes.POINTER(ctypes.c_void_p)]),

@@ -362,6 +362,15 @@ class Ahrs(_Handle):
         _check(lib().bingham_ahrs_gyro_bias(self._h(), _ptr(out)))
         return out
 
+    def gyro_scale(self) -> Array:
+        """The gyroscope scale-error estimate (relative, per sensor axis: the gyroscope reads
+        ``(1 + s_i)`` times the rate about axis ``i``, plus the bias), learned with the bias
+        from ``gyro_scale_std``'s prior; zeros when ``gyro_scale_std`` is 0
+        (``bingham_ahrs_gyro_scale``)."""
+        out = np.empty(3)
+        _check(lib().bingham_ahrs_gyro_scale(self._h(), _ptr(out)))
+        return out
+
     def gyro_bias_covariance(self) -> Array:
         """The covariance of the gyroscope bias estimate ((rad/s)², sensor frame) as a 3×3
         array, symmetric positive semi-definite: ``bias_std²·I`` on creation, then shrinking

@@ -614,6 +614,33 @@ pub unsafe extern "C" fn bingham_ahrs_gyro_bias(
     })
 }
 
+/// The gyroscope scale-error estimate (relative, per sensor axis): the gyroscope reads
+/// `(1 + scale[i])` times the rate about its axis `i` (plus the bias); the AHRS turns the state
+/// by `gyr − bias − scale ∘ gyr` (componentwise). Estimated with the bias from the corrections
+/// during rotation, starting from 0 with the standard deviation `gyro_scale_std` (see
+/// `bingham_ahrs_params`; default 0.001, i.e. 0.1 %) and never walking; exactly 0 when
+/// `gyro_scale_std` is 0. Each component stays within ±0.05.
+///
+/// Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `scale`). On error nothing is written.
+///
+/// # Safety
+/// `a`: a live handle; `scale`: 3 writable doubles.
+#[no_mangle]
+pub unsafe extern "C" fn bingham_ahrs_gyro_scale(
+    a: *const bingham_ahrs,
+    scale: *mut f64,
+) -> bingham_status {
+    guard("bingham_ahrs_gyro_scale", || {
+        // SAFETY: forwarded caller contract.
+        unsafe {
+            getter(a, args!(scale: out [3]), |ahrs, v| {
+                v.copy_from_slice(&ahrs.gyro_scale());
+                Ok(())
+            })
+        }
+    })
+}
+
 /// The covariance of the gyroscope bias estimate, in (rad/s)², sensor frame: a 3×3 matrix
 /// written row-major into `cov` (9 doubles; `cov[3*i + j]` is the covariance of the bias
 /// components i and j), symmetric positive semi-definite. The square roots of its diagonal

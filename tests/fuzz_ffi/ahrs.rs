@@ -881,7 +881,7 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                 }
             } else if r < 9 {
                 // --- getters with NULL / misaligned arguments
-                let which = rng.below(8);
+                let which = rng.below(9);
                 let null_handle = rng.chance(0.5);
                 let mut buf = Buf::sentinel(16);
                 let mut buf2 = Buf::sentinel(4);
@@ -915,6 +915,7 @@ fn ahrs_sequence(seed: u64, verbose: bool) -> Result<u64, String> {
                             "bingham_ahrs_orientation_covariance",
                             bingham_ahrs_orientation_covariance(ap, o1),
                         ),
+                        7 => ("bingham_ahrs_gyro_scale", bingham_ahrs_gyro_scale(ap, o1)),
                         _ => (
                             "bingham_ahrs_angular_spread",
                             bingham_ahrs_angular_spread(ap, o1),

@@ -78,6 +78,7 @@ pub(crate) fn ahrs_health(a: *const bingham_ahrs) -> Result<bingham_ahrs_health_
 /// value ≥ 0, or NOT_CONVERGED with the output untouched).
 pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
     let (mut q, mut m, mut z, mut b, mut s) = ([0.0; 4], [0.0; 16], [0.0; 4], [0.0; 3], [0.0; 4]);
+    let mut g = [0.0; 3];
     let (mut c, mut oc) = ([0.0; 9], [0.0; 9]);
     // SAFETY: a is live; buffers of the documented lengths.
     let sts = unsafe {
@@ -85,6 +86,7 @@ pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
             bingham_ahrs_quaternion(a, q.as_mut_ptr()),
             bingham_ahrs_state(a, m.as_mut_ptr(), z.as_mut_ptr()),
             bingham_ahrs_gyro_bias(a, b.as_mut_ptr()),
+            bingham_ahrs_gyro_scale(a, g.as_mut_ptr()),
             bingham_ahrs_gyro_bias_covariance(a, c.as_mut_ptr()),
             bingham_ahrs_orientation_covariance(a, oc.as_mut_ptr()),
         ]
@@ -122,6 +124,10 @@ pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
         .any(|v| !v.is_finite() || (s.contains(v) && *v < 0.0))
     {
         return Err(format!("bias {b:?} / spread {s:?}"));
+    }
+    // the scale error is clipped to ±0.05 (the header's contract)
+    if g.iter().any(|v| !v.is_finite() || v.abs() > 0.05) {
+        return Err(format!("gyroscope scale {g:?}: not finite or beyond ±0.05"));
     }
     let scale = (0..3).map(|i| c[4 * i]).fold(0.0, f64::max);
     let asymmetric =
@@ -180,6 +186,7 @@ pub(crate) fn ahrs_bits(a: *const bingham_ahrs) -> Result<Vec<u64>, String> {
         .chain(&m)
         .chain(&z)
         .chain(&b)
+        .chain(&g)
         .chain(&s)
         .chain(&c)
         .chain(&oc)
