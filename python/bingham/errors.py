@@ -93,6 +93,7 @@ _PYTHON_NAMES: Dict[str, str] = {
     "bingham_ahrs_angular_spread": "Ahrs.angular_spread",
     "bingham_ahrs_gyro_bias": "Ahrs.gyro_bias",
     "bingham_ahrs_gyro_bias_covariance": "Ahrs.gyro_bias_covariance",
+    "bingham_ahrs_gyro_scale": "Ahrs.gyro_scale",
     "bingham_ahrs_orientation_covariance": "Ahrs.orientation_covariance",
     "bingham_ahrs_mag_latency_estimate": "Ahrs.mag_latency_estimate",
     "bingham_spin_filter_new": "SpinFilter",
