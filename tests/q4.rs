@@ -93,6 +93,37 @@ fn q4_rotation_vectors() {
     assert!(dist3(&back, &[PI, 0.0, 0.0]) < 1e-14, "{back:?}");
 }
 
+/// Below `SERIES_ANGLE` the quaternion comes from series: the scalar part within 2.5e-16 of the
+/// library's `cos(θ/2)`, the vector part within 2.5e-16 of `sin(θ/2)` (relative to its norm)
+/// of `sin(θ/2)·v/θ` (about an ulp), over angles from
+/// 1e-300 to the switch (log-spaced, random axes), and both sides of the switch agree as well.
+#[test]
+fn q4_from_rotation_vector_series_matches_sin_cos() {
+    let mut rng = Rng64(91);
+    let top = q4::SERIES_ANGLE;
+    let mut worst = 0.0f64;
+    for i in 0..=4000 {
+        // θ from 1e-300 up to just below the switch, then a few just above it
+        let th = if i < 4000 {
+            top * 10f64.powf(-300.0 * (1.0 - f64::from(i) / 4000.0)) * (1.0 - 1e-12)
+        } else {
+            top * (1.0 + 1e-12)
+        };
+        let k: [f64; 3] = rng.unit_array::<3>();
+        let v = [th * k[0], th * k[1], th * k[2]];
+        let q = q4::from_rotation_vector(&v);
+        // from θ itself: |v|² underflows below 1e-154
+        let h = 0.5 * th;
+        let want = [h.cos(), h.sin() * k[0], h.sin() * k[1], h.sin() * k[2]];
+        for j in 0..4 {
+            let scale = if j == 0 { 1.0 } else { h.sin() };
+            let rel = (q[j] - want[j]).abs() / scale.max(f64::MIN_POSITIVE);
+            worst = worst.max(rel);
+        }
+    }
+    assert!(worst <= 2.5e-16, "largest relative difference {worst:e}");
+}
+
 #[test]
 fn q4_from_matrix() {
     let mut rng = Rng64(73);
