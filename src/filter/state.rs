@@ -7,10 +7,10 @@ use nalgebra::Const;
 use super::noise::{capped, Noise, NoiseCache, Role};
 use super::types::{Mat, Vect};
 use crate::canonical::{params_row_major, unit};
-use crate::distribution::{bayes_product, log_f_omega, omega, product_eigen_precision};
+use crate::distribution::{bayes_product_in_basis, log_f_omega, omega, product_eigen_precision};
 use crate::error::{Error, Result};
 use crate::linalg::{congruence, write_row_major};
-use crate::mle::{fit_second_moment, Derivs};
+use crate::mle::{fit_second_moment, fit_second_moment_in_basis, Derivs};
 use crate::quaternion::{compose_moments, left, right};
 
 /// The filter for one dimension.
@@ -102,7 +102,7 @@ impl<const D: usize> Core<D> {
 
     /// Bayes product with the likelihood `exp(xᵀ P x)`; the state is assigned only on success.
     pub(crate) fn update_precision(&mut self, p: &Mat<D>) -> Result<()> {
-        let (m_new, z_new) = bayes_product(&self.m, &self.z, p)?;
+        let (m_new, z_new) = bayes_product_in_basis(&self.m, &self.z, p)?;
         self.m = m_new;
         self.z = z_new;
         Ok(())
@@ -185,7 +185,7 @@ impl Core<4> {
     pub(crate) fn compose_moment(&mut self, w_state: &Vect<4>, s: &Mat<4>) -> Result<()> {
         let a = congruence(&self.m, w_state);
         let c = compose_moments(&a, s);
-        let (m, z, solution) = fit_second_moment(&c, self.predicted.as_ref())?;
+        let (m, z, solution) = fit_second_moment_in_basis(&c, &self.m, self.predicted.as_ref())?;
         self.m = m;
         self.z = z;
         self.predicted = Some(solution);

@@ -158,43 +158,162 @@ pub(crate) fn sym_eigen<D: Dim>(c: &Square<D>) -> Result<(Square<D>, Vector<D>)>
 where
     DefaultAllocator: Allocator<D, D> + Allocator<D>,
 {
+    check_finite_input(c)?;
+    let (vt, vals) = jacobi_unsorted(c);
+    sort_and_sign(&vals, |r, i| vt[(i, r)])
+}
+
+/// Largest `max |MᵀM − I|` of a basis [`sym_eigen_in_basis`] accepts (2^-50 ≈ 8.9e-16, four
+/// ulps of 1: what the Jacobi routine's eigenvectors have, so that the warm-started result is
+/// orthonormal to a few ulps like the cold one). A basis that has drifted further (the
+/// filter's `M` after many exact rotations and warm-started steps) is declined, and the caller
+/// decomposes cold, which restores the orthonormality.
+pub(crate) const WARM_BASIS_TOL: f64 = 8.881_784_197_001_252e-16;
+
+/// Whether `m` is orthonormal enough to warm-start [`sym_eigen_in_basis`]
+/// (`max |MᵀM − I| ≤ WARM_BASIS_TOL`, the upper triangle of `MᵀM` checked; NaN fails).
+pub(crate) fn warm_basis<D: Dim>(m: &Square<D>) -> bool
+where
+    DefaultAllocator: Allocator<D, D>,
+{
+    let n = m.nrows();
+    for i in 0..n {
+        for j in i..n {
+            let mut g = 0.0;
+            for r in 0..n {
+                g += m[(r, i)] * m[(r, j)];
+            }
+            let t = if i == j { 1.0 } else { 0.0 };
+            // (a NaN fails the test)
+            if (g - t).abs().is_nan() || (g - t).abs() > WARM_BASIS_TOL {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// `Mᵀ C M` of a symmetric `c` (the upper triangle computed, the lower mirrored: exactly
+/// symmetric): `c` in the basis of the columns of `m`.
+pub(crate) fn in_basis<D: Dim>(c: &Square<D>, m: &Square<D>) -> Square<D>
+where
+    DefaultAllocator: Allocator<D, D>,
+{
+    let (d, _) = c.shape_generic();
+    let n = d.value();
+    let cm = Square::from_fn_generic(d, d, |i, j| {
+        let mut t = 0.0;
+        for k in 0..n {
+            t += c[(i, k)] * m[(k, j)];
+        }
+        t
+    });
+    let mut b = zeros(d);
+    for i in 0..n {
+        for j in i..n {
+            let mut t = 0.0;
+            for k in 0..n {
+                t += m[(k, i)] * cm[(k, j)];
+            }
+            b[(i, j)] = t;
+            b[(j, i)] = t;
+        }
+    }
+    b
+}
+
+/// [`sym_eigen`] of `M B Mᵀ` given `b` (symmetric, upper triangle read) and an orthonormal `m`
+/// ([`warm_basis`]), warm-started from the basis `m`: Jacobi runs on `b` (in the filter `b` is
+/// `C` expressed in the previous eigenbasis, nearly diagonal, so it converges in fewer sweeps)
+/// and the eigenvectors are `M · V_B`. Same conventions as [`sym_eigen`] (ascending, each
+/// column's largest-magnitude entry positive); the eigenpairs agree with those of the cold
+/// decomposition of `M B Mᵀ` to rounding.
+pub(crate) fn sym_eigen_in_basis<D: Dim>(
+    b: &Square<D>,
+    m: &Square<D>,
+) -> Result<(Square<D>, Vector<D>)>
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D>,
+{
+    check_finite_input(b)?;
+    let (vt, vals) = jacobi_unsorted(b);
+    let (d, _) = b.shape_generic();
+    let n = d.value();
+    // V = M · V_B, with `vt[(i, k)]` entry k of eigenvector i of `b`
+    let v = Square::from_fn_generic(d, d, |r, i| {
+        let mut t = 0.0;
+        for k in 0..n {
+            t += m[(r, k)] * vt[(i, k)];
+        }
+        t
+    });
+    sort_and_sign(&vals, |r, i| v[(r, i)])
+}
+
+/// The error of [`sym_eigen`] for a matrix with a non-finite entry.
+fn check_finite_input<D: Dim>(c: &Square<D>) -> Result<()>
+where
+    DefaultAllocator: Allocator<D, D>,
+{
     if !c.iter().all(|v| v.is_finite()) {
         return Err(Error::Numerical(
             "eigendecomposition of a non-finite matrix".into(),
         ));
     }
+    Ok(())
+}
+
+/// The Jacobi routine on `c`: `(Vᵀ, λ)` unsorted, row `i` of `Vᵀ` the eigenvector of `λ_i`.
+fn jacobi_unsorted<D: Dim>(c: &Square<D>) -> (Square<D>, Vector<D>)
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D>,
+{
     let (d, _) = c.shape_generic();
     let n = d.value();
     // The column-major storage of `cᵀ` is `c` row-major, as the routine reads it; `v` comes back
-    // row-major (eigenvectors as columns), so `v[r * n + i]` is entry `r` of eigenvector `i`.
+    // row-major (eigenvectors as columns), which read column-major is `Vᵀ`.
     let mut a = c.transpose();
-    let mut v = zeros(d);
+    let mut vt = zeros(d);
     let mut vals = zero_vector(d);
     // 2n scratch entries, used only for n ≥ 5 (n ≤ 4 runs on local arrays)
     let mut work = zeros(d);
     jacobi_in_place(
         n,
         a.as_mut_slice(),
-        v.as_mut_slice(),
+        vt.as_mut_slice(),
         vals.as_mut_slice(),
         &mut work.as_mut_slice()[..2 * n],
     );
-    let v = v.as_slice();
-    let idx = argsort(&vals);
+    (vt, vals)
+}
+
+/// The eigenpairs `vals`, `v(r, i)` (entry `r` of the eigenvector of `vals[i]`) sorted
+/// ascending (stable for ties), each eigenvector's largest-magnitude entry made positive;
+/// non-finite results are an error.
+fn sort_and_sign<D: Dim>(
+    vals: &Vector<D>,
+    v: impl Fn(usize, usize) -> f64,
+) -> Result<(Square<D>, Vector<D>)>
+where
+    DefaultAllocator: Allocator<D, D> + Allocator<D>,
+{
+    let (d, _) = vals.shape_generic();
+    let n = d.value();
+    let idx = argsort(vals);
     let mut sorted = zero_vector(d);
     let mut vecs = zeros(d);
     for (k, &i) in idx.iter().enumerate() {
         sorted[k] = vals[i];
         let mut big = 0.0f64;
         for r in 0..n {
-            let x = v[r * n + i];
+            let x = v(r, i);
             if x.abs() > big.abs() {
                 big = x;
             }
         }
         let s = if big < 0.0 { -1.0 } else { 1.0 };
         for r in 0..n {
-            vecs[(r, k)] = s * v[r * n + i];
+            vecs[(r, k)] = s * v(r, i);
         }
     }
     if !sorted.iter().all(|v| v.is_finite()) || !vecs.iter().all(|v| v.is_finite()) {
