@@ -25,7 +25,9 @@
 //! The state lives on the stack (`d = 2, 4`, fixed-size nalgebra types, the `Core` in `state`):
 //! after the first step with a given noise a predict or update performs **no heap allocation**;
 //! noises are validated and prepared once and cached on their parameters' bit patterns
-//! (`noise`); the moment matching is warm-started from the previous prediction. Updates stay
+//! (`noise`); the moment matching is warm-started from the previous prediction, and the
+//! eigendecompositions of the prediction (d = 4) and of the update from the state's principal
+//! directions (`docs/design.md`, "Multiply (Bayes)"). Updates stay
 //! exact for any finite concentration; the prediction needs the state's second moment, singular
 //! to working precision for `|z| ≳ 1e13`, so concentrations below `−MAX_CONCENTRATION` (of the
 //! state and of the process noise) are raised to it there (an angular spread of about 7 µrad).
