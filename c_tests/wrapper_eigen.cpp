@@ -267,6 +267,18 @@ static void test_ahrs() {
     if (err_deg >= 0.5) std::fprintf(stderr, "    AHRS error %.3f deg\n", err_deg);
     CHECK(err_deg < 0.5);
     CHECK((a.gyro_bias_vector() - Vector3d(b.gyro_bias()[0], b.gyro_bias()[1], b.gyro_bias()[2])).norm() == 0);
+    {
+        // the scale estimate as an Eigen vector: entry i = the array's (and the C call's) entry
+        // i, after a turning stream that moves it off zero
+        bingham::Ahrs s(0.01);
+        for (int k = 0; k < 200; ++k)
+            s.update(Vector3d(0.1, -0.05, 0.2 * std::sin(0.1 * k)), Vector3d(0.3, -0.2, 9.7), Vector3d(0.1, 20.0, -40.0));
+        const Vector3d sv = s.gyro_scale_vector();
+        double sc[3];
+        CHECK_OK(bingham_ahrs_gyro_scale(s.get(), sc));
+        CHECK(sv(0) == sc[0] && sv(1) == sc[1] && sv(2) == sc[2]);
+        CHECK(sv.norm() > 0.0);
+    }
     // the bias covariance as Eigen::Matrix3d: entry (i, j) = the C call's cov[3 i + j]
     const Eigen::Matrix3d cov = a.gyro_bias_covariance_matrix();
     double cc[9];

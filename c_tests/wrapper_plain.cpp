@@ -1034,6 +1034,11 @@ static void test_ahrs() {
     const auto ab = a.gyro_bias();
     CHECK(std::memcmp(asp.data(), sp, sizeof sp) == 0 && a.uncertainty() == sp[3]);
     CHECK(std::memcmp(ab.data(), bias, sizeof bias) == 0);
+    // the scale-error estimate: bit for bit the C call's
+    double scale[3];
+    CHECK_OK(bingham_ahrs_gyro_scale(c, scale));
+    const auto as = a.gyro_scale();
+    CHECK(std::memcmp(as.data(), scale, sizeof scale) == 0);
     // the bias covariance: bit for bit the C call's, row-major; bias_std^2 * I on creation
     double cov[9];
     CHECK_OK(bingham_ahrs_gyro_bias_covariance(c, cov));

@@ -1428,6 +1428,11 @@ public:
         const auto b = gyro_bias();
         return {b[0], b[1], b[2]};
     }
+    /// The gyroscope scale-error estimate as an Eigen vector (relative, per sensor axis).
+    Eigen::Vector3d gyro_scale_vector() const {
+        const auto s = gyro_scale();
+        return {s[0], s[1], s[2]};
+    }
     /// The covariance of the gyroscope bias estimate as an Eigen matrix ((rad/s)^2).
     Eigen::Matrix3d gyro_bias_covariance_matrix() const {
         const auto c = gyro_bias_covariance();
