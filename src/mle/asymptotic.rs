@@ -39,6 +39,30 @@ struct Jet {
     d: f64,
 }
 
+/// What the series' terms are evaluated on: plain values, or [`Jet`]s.
+trait Term: Copy + std::ops::Add<Output = Self> + std::ops::Mul<Output = Self> {
+    const ZERO: Self;
+    /// `c · self`.
+    fn scale(self, c: f64) -> Self;
+}
+
+impl Term for f64 {
+    const ZERO: f64 = 0.0;
+    fn scale(self, c: f64) -> f64 {
+        c * self
+    }
+}
+
+impl Term for Jet {
+    const ZERO: Jet = Jet { v: 0.0, d: 0.0 };
+    fn scale(self, c: f64) -> Jet {
+        Jet {
+            v: c * self.v,
+            d: c * self.d,
+        }
+    }
+}
+
 impl std::ops::Add for Jet {
     type Output = Jet;
     fn add(self, o: Jet) -> Jet {
@@ -59,22 +83,13 @@ impl std::ops::Mul for Jet {
     }
 }
 
-impl std::ops::Mul<Jet> for f64 {
-    type Output = Jet;
-    fn mul(self, o: Jet) -> Jet {
-        Jet {
-            v: self * o.v,
-            d: self * o.d,
-        }
-    }
-}
-
-const ZERO: Jet = Jet { v: 0.0, d: 0.0 };
+const ZERO: Jet = Jet::ZERO;
 
 /// The series' terms beyond `1/s_i − 1` for coordinate `i` of `s` (`s.len() ≤ 3`).
-fn higher_terms(s: &[Jet], i: usize) -> Jet {
+fn higher_terms<T: Term>(s: &[T], i: usize) -> T {
     let si = s[i];
-    let (mut sum, mut sq, mut cube, mut pairs, mut mixed) = (ZERO, ZERO, ZERO, ZERO, ZERO);
+    let (mut sum, mut sq, mut cube, mut pairs, mut mixed) =
+        (T::ZERO, T::ZERO, T::ZERO, T::ZERO, T::ZERO);
     for (j, &sj) in s.iter().enumerate() {
         if j == i {
             continue;
@@ -91,48 +106,63 @@ fn higher_terms(s: &[Jet], i: usize) -> Jet {
             }
         }
     }
-    let second = 3.0 * si + sum;
-    let third = 9.0 * (si * si) + 3.0 * (si * sum) + 2.0 * sq + pairs;
-    let fourth = 153.0 * (si * si * si)
-        + 54.0 * (si * si * sum)
-        + 36.0 * (si * sq)
-        + 18.0 * (si * pairs)
-        + 25.0 * cube
-        + 12.0 * mixed;
-    -1.0 * (second + 2.0 * third + fourth)
+    let second = si.scale(3.0) + sum;
+    let third = (si * si).scale(9.0) + (si * sum).scale(3.0) + sq.scale(2.0) + pairs;
+    let fourth = (si * si * si).scale(153.0)
+        + (si * si * sum).scale(54.0)
+        + (si * sq).scale(36.0)
+        + (si * pairs).scale(18.0)
+        + cube.scale(25.0)
+        + mixed.scale(12.0);
+    (second + third.scale(2.0) + fourth).scale(-1.0)
 }
 
-/// The gradient of [`higher_terms`] of coordinate `i` in `s` (`s.len() ≤ 3`; entries past
-/// `s.len()` zero), by the derivatives of its sums written out (one pass instead of one
-/// forward-mode evaluation per direction; the tests compare the two).
-fn higher_terms_gradient(s: &[f64], i: usize) -> [f64; 3] {
-    let si = s[i];
-    let (mut sum, mut sq, mut pairs) = (0.0, 0.0, 0.0);
-    for (j, &sj) in s.iter().enumerate() {
-        if j == i {
-            continue;
-        }
-        for (l, &sl) in s.iter().enumerate() {
-            if l > j && l != i {
-                pairs += sj * sl;
+/// [`higher_terms`] of every coordinate of `s` (`s.len() ≤ 3`) with its gradient in `s`
+/// (`grad[i][m] = ∂T_i/∂s_m`; entries past `s.len()` zero), written out on the (at most two)
+/// other coordinates `o₁, o₂` of each `i`: one pass instead of one forward-mode evaluation per
+/// coordinate and direction (the tests compare the two).
+fn terms_and_gradients(s: &[f64]) -> ([f64; 3], [[f64; 3]; 3]) {
+    let k = s.len();
+    let (mut value, mut grad) = ([0.0; 3], [[0.0; 3]; 3]);
+    for i in 0..k {
+        let si = s[i];
+        // the other coordinates (o₂ = 0 for k = 2: its terms vanish)
+        let (m1, m2) = match i {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        };
+        let o1 = if m1 < k { s[m1] } else { 0.0 };
+        let o2 = if m2 < k { s[m2] } else { 0.0 };
+        let sum = o1 + o2;
+        let sq = o1 * o1 + o2 * o2;
+        let cube = o1 * o1 * o1 + o2 * o2 * o2;
+        let pairs = o1 * o2;
+        let mixed = o1 * o1 * o2 + o2 * o2 * o1;
+        let second = 3.0 * si + sum;
+        let third = 9.0 * (si * si) + 3.0 * (si * sum) + 2.0 * sq + pairs;
+        let fourth = 153.0 * (si * si * si)
+            + 54.0 * (si * si * sum)
+            + 36.0 * (si * sq)
+            + 18.0 * (si * pairs)
+            + 25.0 * cube
+            + 12.0 * mixed;
+        value[i] = -(second + 2.0 * third + fourth);
+        let (d2, d3, d4) = (
+            3.0,
+            18.0 * si + 3.0 * sum,
+            459.0 * si * si + 108.0 * si * sum + 36.0 * sq + 18.0 * pairs,
+        );
+        grad[i][i] = -(d2 + 2.0 * d3 + d4);
+        for m in [m1, m2] {
+            if m >= k {
+                continue;
             }
-        }
-        sum += sj;
-        sq += sj * sj;
-    }
-    let mut g = [0.0; 3];
-    for (m, &sm) in s.iter().enumerate() {
-        let (d2, d3, d4) = if m == i {
-            (
-                3.0,
-                18.0 * si + 3.0 * sum,
-                459.0 * si * si + 108.0 * si * sum + 36.0 * sq + 18.0 * pairs,
-            )
-        } else {
+            let sm = s[m];
             // the sums' derivatives in s_m: sum 1, sq 2s_m, cube 3s_m², pairs (sum − s_m),
             // mixed 2s_m(sum − s_m) + (sq − s_m²)
             let rest = sum - sm;
-            (
+            let (d2, d3, d4) = (
                 1.0,
                 3.0 * si + 4.0 * sm + rest,
                 54.0 * si * si
@@ -140,11 +170,11 @@ fn higher_terms_gradient(s: &[f64], i: usize) -> [f64; 3] {
                     + 18.0 * si * rest
                     + 75.0 * sm * sm
                     + 12.0 * (2.0 * sm * rest + sq - sm * sm),
-            )
-        };
-        g[m] = -(d2 + 2.0 * d3 + d4);
+            );
+            grad[i][m] = -(d2 + 2.0 * d3 + d4);
+        }
     }
-    g
+    (value, grad)
 }
 
 /// `1/ω_i` of the series at `z` (sorted, `z_d = 0`, d = 3 or 4), for the tests.
@@ -189,13 +219,29 @@ pub(super) fn series_hessian(z: &[f64], grad: &[f64], hess: &mut [f64]) -> bool 
     for j in 0..k {
         s[j] = -0.5 / z[j];
     }
+    let mut dinv = [[0.0; 3]; 3];
+    let (_, grads) = terms_and_gradients(&s[..k]);
+    for (i, row) in dinv.iter_mut().enumerate().take(k) {
+        // ∂(1/ω_i)/∂z_j = −2δ_ij + ∂T_i/∂s_j · ds_j/dz_j, ds_j/dz_j = 2 s_j²
+        let dt = grads[i];
+        for j in 0..k {
+            row[j] = if i == j { -2.0 } else { 0.0 } + dt[j] * 2.0 * s[j] * s[j];
+        }
+    }
+    hessian_from(&dinv, grad, hess)
+}
+
+/// The Hessian of `log F` into `hess` (d×d row-major, d = `grad.len()` ≤ 4) from `ω` = `grad`
+/// and `dinv[i][j] = ∂(1/ω_i)/∂z_j` (i, j < d − 1): `H_ij = −ω_i² dinv[i][j]`, symmetrized; the
+/// last row and column from `Σ_j H_ij = 0`. Returns `false`, `hess` untouched, if the result
+/// is not finite.
+pub(super) fn hessian_from(dinv: &[[f64; 3]; 3], grad: &[f64], hess: &mut [f64]) -> bool {
+    let d = grad.len();
+    let k = d - 1;
     let mut h = [0.0; 16];
     for i in 0..k {
-        // ∂(1/ω_i)/∂z_j = −2δ_ij + ∂T_i/∂s_j · ds_j/dz_j, ds_j/dz_j = 2 s_j²
-        let dt = higher_terms_gradient(&s[..k], i);
         for j in 0..k {
-            let dinv = if i == j { -2.0 } else { 0.0 } + dt[j] * 2.0 * s[j] * s[j];
-            h[i * d + j] = -grad[i] * grad[i] * dinv;
+            h[i * d + j] = -grad[i] * grad[i] * dinv[i][j];
         }
     }
     for i in 0..k {
@@ -218,6 +264,112 @@ pub(super) fn series_hessian(z: &[f64], grad: &[f64], hess: &mut [f64]) -> bool 
     }
     hess.copy_from_slice(&h[..d * d]);
     true
+}
+
+/// [`series_root`] is tried where every concentration below the mode of the start is at least
+/// this large (`s_j ≤ 2.5e-4`). The series' omitted order leaves its root a relative residual
+/// in the exact `ω` of about `5.6e3 s_max⁵` (measured from 100 to 1600 over the test's
+/// problems: 1.9e-8 at 100, 5.3e-13 at 800, 1.7e-14 at 1600), 5e-15 here: six times below a
+/// third of [`MLE_TOL`](super::solution::MLE_TOL), so the root meets the tolerance on the
+/// exact `ω` (the AHRS's states: every `|z_j|` in the thousands). Below it the root may miss,
+/// and the check that refuses it would cost an evaluation for nothing.
+const ROOT_MIN: f64 = 2000.0;
+
+/// The root of the series' moment equation `1/ω_i(z) = 1/t_i` (i < d − 1; `t` ascending,
+/// normalized, d = 3 or 4), by Newton's method on the series alone: `1/ω_i = 2a_i − 1 + T_i(s)`
+/// with `a = −z`, `s_j = 1/(2a_j)`, whose Jacobian in `a` is `2δ_ij − 2s_j² ∂T_i/∂s_j` (nearly
+/// `2I`, so two steps reach the rounding of `a`: [`SETTLED`]). From `z` (the start, `z[d−1] = 0`,
+/// every other entry at most `−ROOT_MIN`), which receives the root. `dinv` receives
+/// `∂(1/ω_i)/∂z_j` of the series at the last iterate (for [`hessian_from`]). The root is the
+/// series', not the exact equation's: the caller checks it on the exact `ω` (the series'
+/// truncation is below `MLE_TOL/3` here, see [`ROOT_MIN`]). Returns `false`, `z` untouched,
+/// where it does not apply, or if the iteration leaves the range or does not settle.
+pub(super) fn series_root(t: &[f64], z: &mut [f64], dinv: &mut [[f64; 3]; 3]) -> bool {
+    let d = z.len();
+    if !(d == 3 || d == 4) || t.len() != d {
+        return false;
+    }
+    let k = d - 1;
+    if !(0..k).all(|i| z[i] <= -ROOT_MIN) {
+        return false;
+    }
+    let (mut a, mut inv_t) = ([0.0; 3], [0.0; 3]);
+    for i in 0..k {
+        a[i] = -z[i];
+        inv_t[i] = 1.0 / t[i];
+    }
+    for _ in 0..8 {
+        let mut s = [0.0; 3];
+        for j in 0..k {
+            s[j] = 0.5 / a[j];
+        }
+        let mut jac = [[0.0; 3]; 3];
+        let mut f = [0.0; 3];
+        let (value, grads) = terms_and_gradients(&s[..k]);
+        for i in 0..k {
+            f[i] = (2.0 * a[i] - 1.0 + value[i]) - inv_t[i];
+            let dt = grads[i];
+            for j in 0..k {
+                jac[i][j] = if i == j { 2.0 } else { 0.0 } - dt[j] * 2.0 * s[j] * s[j];
+                dinv[i][j] = -jac[i][j];
+            }
+        }
+        let Some(step) = solve3(&jac, &f, k) else {
+            return false;
+        };
+        let mut largest: f64 = 0.0;
+        for i in 0..k {
+            a[i] -= step[i];
+            largest = largest.max((step[i] / a[i]).abs());
+        }
+        if !(0..k).all(|i| a[i].is_finite() && a[i] >= 0.5 * ROOT_MIN) {
+            return false;
+        }
+        if largest <= SETTLED {
+            for i in 0..k {
+                z[i] = -a[i];
+            }
+            return true;
+        }
+    }
+    false
+}
+
+/// [`series_root`] stops after a step of at most this relative size in every `a_i`. Its
+/// Jacobian `2I + O(s²)` changes by `O(s²) ≤ 1e-7` relative across a step (`s ≤ 2.5e-4`), so a
+/// step of relative size `δ` leaves an error of about `1e-7 δ` (Newton's quadratic term): below
+/// the rounding of `a` after a step of 1e-9. From the AHRS's warm starts (1–30 % off) the
+/// second step is that small.
+const SETTLED: f64 = 1e-9;
+
+/// `J⁻¹ f` for the leading `k × k` block (k ≤ 3) of `jac` by elimination with partial
+/// pivoting; `None` if a pivot vanishes.
+fn solve3(jac: &[[f64; 3]; 3], f: &[f64; 3], k: usize) -> Option<[f64; 3]> {
+    let (mut m, mut x) = (*jac, *f);
+    for c in 0..k {
+        let p = (c..k).max_by(|&i, &j| m[i][c].abs().total_cmp(&m[j][c].abs()))?;
+        m.swap(c, p);
+        x.swap(c, p);
+        if m[c][c] == 0.0 {
+            return None;
+        }
+        let pivot = m[c];
+        for r in c + 1..k {
+            let l = m[r][c] / pivot[c];
+            for (e, p) in m[r][c..k].iter_mut().zip(&pivot[c..k]) {
+                *e -= l * p;
+            }
+            x[r] -= l * x[c];
+        }
+    }
+    for c in (0..k).rev() {
+        let mut v = x[c];
+        for cc in c + 1..k {
+            v -= m[c][cc] * x[cc];
+        }
+        x[c] = v / m[c][c];
+    }
+    Some(x)
 }
 
 /// Adds to Newton's step `step` (its first `d − 1` entries; `H Δ = ω² ∘ G` from `z` with
@@ -308,9 +460,10 @@ mod tests {
         }
     }
 
-    /// The written-out gradient of the higher terms against forward-mode differentiation.
+    /// The written-out terms and gradients against the loops and forward-mode differentiation
+    /// of [`higher_terms`].
     #[test]
-    fn higher_terms_gradient_matches_forward_mode() {
+    fn written_out_terms_match_forward_mode() {
         for s in [
             &[1e-3, 2e-3, 5e-3][..],
             &[3e-4, 3e-4, 3e-4][..],
@@ -318,8 +471,15 @@ mod tests {
             &[2e-5, 7e-3, 1e-4][..],
         ] {
             let k = s.len();
+            let (values, grads) = terms_and_gradients(s);
             for i in 0..k {
-                let g = higher_terms_gradient(s, i);
+                let plain = higher_terms(s, i);
+                assert!(
+                    (values[i] - plain).abs() <= 1e-15 * plain.abs(),
+                    "s = {s:?}, i = {i}: {} vs {plain}",
+                    values[i]
+                );
+                let g = grads[i];
                 for (m, &gm) in g[..k].iter().enumerate() {
                     let jets: Vec<Jet> = s
                         .iter()
@@ -380,6 +540,57 @@ mod tests {
         assert!(!series_hessian(&[-100.0, 0.0], &[0.0; 2], &mut hs[..4]));
         assert_eq!(hs, [7.0; 16]);
         println!("worst at the threshold: {worst_at_min:e}");
+    }
+
+    /// The series' root against the exact moment equation (d = 3, 4) from starts 1–30 % off:
+    /// from [`ROOT_MIN`] up it meets a third of `MLE_TOL` on the exact ω (the quadrature), and
+    /// it declines below [`ROOT_MIN`], for other d, and where the iteration would leave the range.
+    #[test]
+    fn series_root_solves_the_exact_moment_equation() {
+        use crate::mle::solution::MLE_TOL;
+        let (mut worst, mut tried): (f64, usize) = (0.0, 0);
+        for base in [
+            &[-5.0, -3.0, -1.0, 0.0][..],
+            &[-1.0, -1.0, -1.0, 0.0][..],
+            &[-1e4, -30.0, -1.0, 0.0][..],
+            &[-4.0, -1.5, 0.0][..],
+            &[-1.0, -1.0, 0.0][..],
+        ] {
+            for c in [ROOT_MIN, 3e3, 1e4, 1e5, 1e8] {
+                for off in [1.01f64, 0.97, 1.3, 0.8] {
+                    let z: Vec<f64> = base.iter().map(|v| v * c).collect();
+                    let d = z.len();
+                    let t = omega(&z);
+                    let mut zr: Vec<f64> = z.iter().map(|v| v * off).collect();
+                    if zr[..d - 1].iter().any(|&v| v > -ROOT_MIN) {
+                        // (a start below ROOT_MIN is declined: tested below)
+                        continue;
+                    }
+                    tried += 1;
+                    let mut dinv = [[0.0; 3]; 3];
+                    assert!(series_root(&t, &mut zr, &mut dinv), "z = {z:?}, off {off}");
+                    let w = omega(&zr);
+                    let r = (0..d - 1)
+                        .map(|i| (w[i] / t[i] - 1.0).abs())
+                        .fold(0.0, f64::max);
+                    worst = worst.max(r);
+                    assert!(r <= MLE_TOL / 3.0, "z = {z:?}, off {off}: residual {r:e}");
+                }
+            }
+        }
+        println!("worst residual on the exact ω: {worst:e} ({tried} problems)");
+        assert!(tried >= 80, "{tried}");
+        let mut dinv = [[0.0; 3]; 3];
+        let mut z = [-1999.0, -3000.0, -4000.0, 0.0];
+        assert!(!series_root(&[0.1, 0.2, 0.3, 0.4], &mut z, &mut dinv));
+        assert_eq!(z, [-1999.0, -3000.0, -4000.0, 0.0]);
+        let mut z2 = [-3000.0, 0.0];
+        assert!(!series_root(&[0.1, 0.9], &mut z2, &mut dinv));
+        // a target far outside the series' range (ω of a concentration near 5): the iteration
+        // leaves it and declines
+        let mut z3 = [-3000.0, -3000.0, -3000.0, 0.0];
+        assert!(!series_root(&[0.1, 0.1, 0.1, 0.7], &mut z3, &mut dinv));
+        assert_eq!(z3, [-3000.0, -3000.0, -3000.0, 0.0]);
     }
 
     /// One Newton step from a start 1–3 % off (the spin filter's warm starts): corrected, its
