@@ -278,8 +278,9 @@ const ROOT_MIN: f64 = 2000.0;
 /// The root of the series' moment equation `1/ω_i(z) = 1/t_i` (i < d − 1; `t` ascending,
 /// normalized, d = 3 or 4), by Newton's method on the series alone: `1/ω_i = 2a_i − 1 + T_i(s)`
 /// with `a = −z`, `s_j = 1/(2a_j)`, whose Jacobian in `a` is `2δ_ij − 2s_j² ∂T_i/∂s_j` (nearly
-/// `2I`, so two steps reach the rounding of `a`: [`SETTLED`]). From `z` (the start, `z[d−1] = 0`,
-/// every other entry at most `−ROOT_MIN`), which receives the root. `dinv` receives
+/// `2I`, inverted by its Neumann series; two steps reach the rounding of `a`: [`SETTLED`]).
+/// From `z` (the start, `z[d−1] = 0`, every other entry at most `−ROOT_MIN`), which receives
+/// the root. `dinv` receives
 /// `∂(1/ω_i)/∂z_j` of the series at the last iterate (for [`hessian_from`]). The root is the
 /// series', not the exact equation's: the caller checks it on the exact `ω` (the series'
 /// truncation is below `MLE_TOL/3` here, see [`ROOT_MIN`]). Returns `false`, `z` untouched,
@@ -303,29 +304,30 @@ pub(super) fn series_root(t: &[f64], z: &mut [f64], dinv: &mut [[f64; 3]; 3]) ->
         for j in 0..k {
             s[j] = 0.5 / a[j];
         }
-        let mut jac = [[0.0; 3]; 3];
+        // the Jacobian 2(I − E), E_ij = s_j² ∂T_i/∂s_j (|E| ≲ 1e-6 for s ≤ 5e-4: a ≥ ROOT_MIN/2),
+        // inverted by its Neumann series ½(I + E + E²): the omitted E³ is below 1e-17
+        let mut e = [[0.0; 3]; 3];
         let mut f = [0.0; 3];
         let (value, grads) = terms_and_gradients(&s[..k]);
         for i in 0..k {
             f[i] = (2.0 * a[i] - 1.0 + value[i]) - inv_t[i];
-            let dt = grads[i];
             for j in 0..k {
-                jac[i][j] = if i == j { 2.0 } else { 0.0 } - dt[j] * 2.0 * s[j] * s[j];
-                dinv[i][j] = -jac[i][j];
+                e[i][j] = grads[i][j] * s[j] * s[j];
+                dinv[i][j] = if i == j { -2.0 } else { 0.0 } + 2.0 * e[i][j];
             }
         }
-        let Some(step) = solve3(&jac, &f, k) else {
-            return false;
-        };
-        let mut largest: f64 = 0.0;
+        let ef = mat_vec(&e, &f, k);
+        let eef = mat_vec(&e, &ef, k);
+        let mut settled = true;
         for i in 0..k {
-            a[i] -= step[i];
-            largest = largest.max((step[i] / a[i]).abs());
+            let step = 0.5 * (f[i] + ef[i] + eef[i]);
+            a[i] -= step;
+            settled &= step.abs() <= SETTLED * a[i];
         }
         if !(0..k).all(|i| a[i].is_finite() && a[i] >= 0.5 * ROOT_MIN) {
             return false;
         }
-        if largest <= SETTLED {
+        if settled {
             for i in 0..k {
                 z[i] = -a[i];
             }
@@ -342,34 +344,13 @@ pub(super) fn series_root(t: &[f64], z: &mut [f64], dinv: &mut [[f64; 3]; 3]) ->
 /// second step is that small.
 const SETTLED: f64 = 1e-9;
 
-/// `J⁻¹ f` for the leading `k × k` block (k ≤ 3) of `jac` by elimination with partial
-/// pivoting; `None` if a pivot vanishes.
-fn solve3(jac: &[[f64; 3]; 3], f: &[f64; 3], k: usize) -> Option<[f64; 3]> {
-    let (mut m, mut x) = (*jac, *f);
-    for c in 0..k {
-        let p = (c..k).max_by(|&i, &j| m[i][c].abs().total_cmp(&m[j][c].abs()))?;
-        m.swap(c, p);
-        x.swap(c, p);
-        if m[c][c] == 0.0 {
-            return None;
-        }
-        let pivot = m[c];
-        for r in c + 1..k {
-            let l = m[r][c] / pivot[c];
-            for (e, p) in m[r][c..k].iter_mut().zip(&pivot[c..k]) {
-                *e -= l * p;
-            }
-            x[r] -= l * x[c];
-        }
+/// `E f` for the leading `k × k` block of `e` (k ≤ 3).
+fn mat_vec(e: &[[f64; 3]; 3], f: &[f64; 3], k: usize) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    for (o, row) in out.iter_mut().zip(e).take(k) {
+        *o = row[..k].iter().zip(&f[..k]).map(|(x, y)| x * y).sum();
     }
-    for c in (0..k).rev() {
-        let mut v = x[c];
-        for cc in c + 1..k {
-            v -= m[c][cc] * x[cc];
-        }
-        x[c] = v / m[c][c];
-    }
-    Some(x)
+    out
 }
 
 /// Adds to Newton's step `step` (its first `d − 1` entries; `H Δ = ω² ∘ G` from `z` with
