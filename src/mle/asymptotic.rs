@@ -480,19 +480,23 @@ mod tests {
         }
     }
 
+    /// Shapes of `z` (d = 4 and 3; scaled by the concentration): distinct, equal, and far
+    /// apart concentrations.
+    const SHAPES: [&[f64]; 5] = [
+        &[-5.0, -3.0, -1.0, 0.0],
+        &[-1.0, -1.0, -1.0, 0.0],
+        &[-1e4, -30.0, -1.0, 0.0],
+        &[-4.0, -1.5, 0.0],
+        &[-1.0, -1.0, 0.0],
+    ];
+
     /// The series' Hessian against the exact one (the quadrature) where the Newton iteration
     /// uses it (every concentration below the mode from 80 up, d = 3, 4): within 1e-6 of the
     /// diagonal's scale, and closer as the concentrations grow.
     #[test]
     fn series_hessian_matches_the_exact_hessian() {
         let mut worst_at_min: f64 = 0.0;
-        for base in [
-            &[-5.0, -3.0, -1.0, 0.0][..],
-            &[-1.0, -1.0, -1.0, 0.0][..],
-            &[-1e4, -30.0, -1.0, 0.0][..],
-            &[-4.0, -1.5, 0.0][..],
-            &[-1.0, -1.0, 0.0][..],
-        ] {
+        for base in SHAPES {
             for c in [80.0, 200.0, 1e3, 1e4, 1e6] {
                 let z: Vec<f64> = base.iter().map(|v| v * c).collect();
                 let d = z.len();
@@ -530,13 +534,7 @@ mod tests {
     fn series_root_solves_the_exact_moment_equation() {
         use crate::mle::solution::MLE_TOL;
         let (mut worst, mut tried): (f64, usize) = (0.0, 0);
-        for base in [
-            &[-5.0, -3.0, -1.0, 0.0][..],
-            &[-1.0, -1.0, -1.0, 0.0][..],
-            &[-1e4, -30.0, -1.0, 0.0][..],
-            &[-4.0, -1.5, 0.0][..],
-            &[-1.0, -1.0, 0.0][..],
-        ] {
+        for base in SHAPES {
             for c in [ROOT_MIN, 3e3, 1e4, 1e5, 1e8] {
                 for off in [1.01f64, 0.97, 1.3, 0.8] {
                     let z: Vec<f64> = base.iter().map(|v| v * c).collect();
