@@ -10,9 +10,9 @@
 //! pass turns by `gyr[k]` between samples `k−1` and `k`), its time step `t[k+1] − t[k]`, its
 //! gyroscope bias the negative of the forward's. It starts as the online AHRS does, from its
 //! first sample (the recording's last), whose evidence no forward posterior before it holds;
-//! its magnetic reference (the field's norm and dip, against which it tests for disturbances)
-//! is the forward pass's (at the handoff, below), not its first sample's, which may lie in a
-//! disturbance;
+//! its magnetic reference (the field's norm and dip, against which it tests for disturbances,
+//! and the field's variation over the motion, which widens the heading evidence) is the forward
+//! pass's (at the handoff, below), not its first sample's, which may lie in a disturbance;
 //! at sample `k` the smoother takes its *predicted* state: the state after sample `k+1` turned
 //! by the gyroscope to sample `k`, before sample `k`'s accelerometer and magnetometer, which
 //! the forward posterior holds already. Its gyroscope has the forward pass's bias estimate
@@ -67,7 +67,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use nalgebra::{Matrix3, Matrix4, Vector3, Vector4};
 
-use crate::ahrs::{Ahrs, AhrsParams, LATENCY_ESTIMATE};
+use crate::ahrs::{Ahrs, AhrsParams, MagReference, LATENCY_ESTIMATE};
 use crate::error::{Error, Result};
 use crate::quaternion::q4;
 
@@ -131,8 +131,8 @@ pub struct SmoothOptions {
     /// AHRS does, from its first sample's accelerometer and magnetometer (false, the default).
     pub uniform_start: bool,
     /// Whether the backward pass takes the forward pass's magnetic reference at the handoff (the
-    /// field's norm and dip its disturbance test compares with) instead of its first sample's
-    /// (default true).
+    /// field's norm and dip its disturbance test compares with, and the variation of the field
+    /// measured so far) instead of its first sample's (default true).
     pub forward_mag_reference: bool,
     /// Whether the backward pass's gyroscope has the forward pass's bias estimate at the handoff
     /// taken out (default true).
@@ -463,8 +463,9 @@ pub const PARALLEL_TIME: f64 = 30.0;
 struct Handoff {
     /// The bias estimate taken out of the backward pass's gyroscope.
     bias: [f64; 3],
-    /// The magnetic reference (norm, dip) the backward pass's disturbance test compares with.
-    mag_reference: Option<(f64, f64)>,
+    /// The magnetic reference (norm, dip) the backward pass's disturbance test compares with,
+    /// and the field's variation the forward pass measured.
+    mag_reference: Option<MagReference>,
     /// The magnetometer's latency (s) by which the backward pass shifts the field samples.
     mag_latency: f64,
     /// Without a magnetometer: the forward pass's final state, the backward pass's start.
@@ -727,7 +728,7 @@ fn backward_pass(
             // the field's reference (norm and dip, what the disturbance test compares with)
             // from the forward pass, not from the last sample, which may lie in a disturbance
             // (a magnet attached for the rest of the recording)
-            if let Some(r) = handoff.mag_reference {
+            if let Some(r) = &handoff.mag_reference {
                 back.set_mag_reference(r);
             }
             start = Some(k);

@@ -49,6 +49,15 @@ pub(super) const RECOVER_TIME: f64 = 0.5;
 /// Rotation rate (rad/s, 20°/s) above which a steady disturbance counts toward a new reference.
 pub(super) const NEW_REF_RATE: f64 = 0.35;
 
+/// What one pass over a recording hands another (module `smoother`): the field's reference
+/// (norm, dip in rad) and the variation of the field it measured over the motion (module
+/// `uncertainty`), which widens the heading evidence by the local field's deviations.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct MagReference {
+    norm_dip: (f64, f64),
+    inhomogeneity: Inhomogeneity,
+}
+
 /// The magnetometer's state in the AHRS.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Magnetic {
@@ -109,16 +118,22 @@ impl Magnetic {
         self.reference.map(|(_, dip)| dip)
     }
 
-    /// The reference norm and dip, if there is one.
-    pub(super) fn reference(&self) -> Option<(f64, f64)> {
-        self.reference
+    /// The reference (norm and dip) with the variation of the field measured so far, if there
+    /// is a reference.
+    pub(super) fn reference(&self) -> Option<MagReference> {
+        self.reference.map(|norm_dip| MagReference {
+            norm_dip,
+            inhomogeneity: self.inhomogeneity,
+        })
     }
 
-    /// Replaces the reference norm and dip (the next sample's test compares against it).
-    pub(super) fn set_reference(&mut self, r: (f64, f64)) {
-        self.reference = Some(r);
-        self.cand = r;
+    /// Replaces the reference norm and dip (the next sample's test compares against it) and
+    /// the averages of the field's variation ([`Inhomogeneity::with_averages_of`]).
+    pub(super) fn set_reference(&mut self, r: &MagReference) {
+        self.reference = Some(r.norm_dip);
+        self.cand = r.norm_dip;
         self.cand_time = 0.0;
+        self.inhomogeneity = self.inhomogeneity.with_averages_of(&r.inhomogeneity);
     }
 
     /// Sets the reference from a field sample `m` seen with the body-frame "up" `up_b`.

@@ -108,6 +108,7 @@ pub use health::{AhrsHealth, HEALTH_THRESHOLD, HEALTH_TIME};
 use latency::{turn_forward, LatencyEstimator};
 use lowpass::Coeffs;
 pub use lowpass::CORRECTION_PERIOD;
+pub(crate) use magnetic::MagReference;
 use magnetic::{heading_exponent, Magnetic};
 pub use params::{
     AhrsParams, LATENCY_ESTIMATE, MAX_LATENCY, MAX_SAMPLE_TIME, MAX_STEP_TIME, MIN_SAMPLE_TIME,
@@ -358,14 +359,15 @@ impl Ahrs {
         )
     }
 
-    /// The magnetic reference (the field's norm and dip, rad), if there is one. Crate-internal:
-    /// the offline smoother (`crate::smoother`) hands the forward pass's to its backward pass.
-    pub(crate) fn mag_reference(&self) -> Option<(f64, f64)> {
+    /// The magnetic reference (the field's norm and dip, and the variation of the field
+    /// measured so far), if there is one. Crate-internal: the offline smoother
+    /// (`crate::smoother`) hands the forward pass's to its backward pass.
+    pub(crate) fn mag_reference(&self) -> Option<MagReference> {
         self.sample_state.mag.reference()
     }
 
-    /// Replaces the magnetic reference (norm, dip) (see [`Ahrs::mag_reference`]).
-    pub(crate) fn set_mag_reference(&mut self, r: (f64, f64)) {
+    /// Replaces the magnetic reference (see [`Ahrs::mag_reference`]).
+    pub(crate) fn set_mag_reference(&mut self, r: &MagReference) {
         self.sample_state.mag.set_reference(r);
     }
 

@@ -263,6 +263,19 @@ impl Inhomogeneity {
         self.dip2.push(self.smooth.1 * self.smooth.1, alpha);
     }
 
+    /// `self` with the averages of `learned` (another pass over the same recording, module
+    /// `smoother`): the variation it measured, kept as this pass goes on learning; this pass's
+    /// own smoothing of the norm and dip (where the sensor is now) is kept.
+    pub(super) fn with_averages_of(self, learned: &Inhomogeneity) -> Inhomogeneity {
+        Inhomogeneity {
+            norm: learned.norm,
+            norm2: learned.norm2,
+            dip: learned.dip,
+            dip2: learned.dip2,
+            ..self
+        }
+    }
+
     /// The field's directional variance per direction (rad²): the mean of the relative
     /// norm's and the dip's variances (0 before there are any).
     pub(super) fn variance(&self) -> f64 {
@@ -275,5 +288,48 @@ impl Inhomogeneity {
             0.0
         };
         0.5 * (norm + var(&self.dip, &self.dip2))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A field whose norm and dip vary with the position (norm ±5 %, dip ±3°, over a period of
+    /// `period` s), pushed at 100 Hz for `seconds`.
+    fn varying(seconds: f64, period: f64) -> Inhomogeneity {
+        let mut m = Inhomogeneity::default();
+        let h = 0.01;
+        for k in 0..(seconds / h) as usize {
+            let phase = 2.0 * std::f64::consts::PI * k as f64 * h / period;
+            m.push(1.0 + 0.05 * phase.sin(), 1.0 + 0.05 * phase.cos(), h);
+        }
+        m
+    }
+
+    /// The handed-over averages give the learned variance at once (what a pass that starts
+    /// fresh learns only over tens of seconds), and the receiver's own smoothing of the norm
+    /// and dip is kept: where its sensor is now, not where the other pass's was.
+    #[test]
+    fn handed_over_averages_carry_the_learned_variance() {
+        let learned = varying(60.0, 10.0);
+        // variance of 0.05·sin (relative norm) and of 0.05·cos (dip, rad), smoothed over 1 s:
+        // about 0.05²/2 each, so their mean is about 1.25e-3
+        let v = learned.variance();
+        assert!((0.8e-3..1.3e-3).contains(&v), "{v:e}");
+        let mut fresh = Inhomogeneity::default();
+        fresh.push(1.0, 0.9, 0.01);
+        assert_eq!(fresh.variance(), 0.0);
+        let handed = fresh.with_averages_of(&learned);
+        assert_eq!(handed.variance(), v);
+        assert_eq!(handed.smooth, (1.0, 0.9));
+        assert_eq!(handed.smoothed, 0.01);
+        // and it goes on learning: a homogeneous field (at the old mean) from now on lowers
+        // the variance
+        let mut later = handed;
+        for _ in 0..6000 {
+            later.push(1.0, 1.0, 0.01);
+        }
+        assert!(later.variance() < 0.5 * v, "{:e} vs {v:e}", later.variance());
     }
 }
