@@ -330,6 +330,10 @@ mod tests {
         for _ in 0..6000 {
             later.push(1.0, 1.0, 0.01);
         }
-        assert!(later.variance() < 0.5 * v, "{:e} vs {v:e}", later.variance());
+        assert!(
+            later.variance() < 0.5 * v,
+            "{:e} vs {v:e}",
+            later.variance()
+        );
     }
 }
