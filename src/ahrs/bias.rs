@@ -33,7 +33,11 @@
 //! and the orientation's spread includes what their uncertainty adds. At rest the gyroscope
 //! measures the bias alone (`H = [I 0]`, [`BiasState::rest`]).
 
-use nalgebra::{Matrix3, Matrix4, Matrix6, SMatrix, SymmetricEigen, Vector3, Vector4};
+use nalgebra::allocator::Allocator;
+use nalgebra::{
+    DefaultAllocator, DimDiff, DimSub, Matrix3, Matrix4, Matrix6, OMatrix, SMatrix, SymmetricEigen,
+    Vector3, Vector4, U1,
+};
 
 use crate::quaternion::q4;
 
@@ -210,12 +214,7 @@ pub(super) fn psd6(a: &Matrix6<f64>) -> Matrix6<f64> {
     if s.cholesky().is_some() {
         return s;
     }
-    let e = SymmetricEigen::new(s);
-    if e.eigenvalues.iter().all(|&v| v >= 0.0) {
-        return s;
-    }
-    let l = e.eigenvalues.map(|v| v.max(0.0));
-    e.eigenvectors * Matrix6::from_diagonal(&l) * e.eigenvectors.transpose()
+    clip_negative(s)
 }
 
 /// `a` symmetrized with negative eigenvalues raised to zero. A positive definite `a` (all
@@ -227,12 +226,23 @@ pub(super) fn psd(a: &Matrix3<f64>) -> Matrix3<f64> {
     if m1 > 0.0 && m2 > 0.0 && s.determinant() > 0.0 {
         return s;
     }
+    clip_negative(s)
+}
+
+/// The symmetric `s` with its negative eigenvalues raised to zero (`s` itself when there are
+/// none), by an eigendecomposition: the path of [`psd`] and [`psd6`] when the cheap tests fail.
+fn clip_negative<D>(s: OMatrix<f64, D, D>) -> OMatrix<f64, D, D>
+where
+    D: DimSub<U1>,
+    DefaultAllocator: Allocator<D, D> + Allocator<DimDiff<D, U1>> + Allocator<D>,
+    OMatrix<f64, D, D>: Copy,
+{
     let e = SymmetricEigen::new(s);
     if e.eigenvalues.iter().all(|&v| v >= 0.0) {
         return s;
     }
     let l = e.eigenvalues.map(|v| v.max(0.0));
-    e.eigenvectors * Matrix3::from_diagonal(&l) * e.eigenvectors.transpose()
+    e.eigenvectors * OMatrix::<f64, D, D>::from_diagonal(&l) * e.eigenvectors.transpose()
 }
 
 /// The body-frame precision `Λ` of the orientation error at the mode of `Bingham(M, z)`
