@@ -31,7 +31,11 @@ their samples (µs per sample); the table shows the median over the rounds and t
 medians (Bingham ÷ VQF: below 1 the AHRS is faster). The header names the CPU (``model name``
 of /proc/cpuinfo), the d = 3, 4 kernel path the library runs (``BINGHAM_KERNEL`` if it names a
 path the CPU has, else the fastest one the CPU flags allow: the library's own rule, see
-``docs/speed.md``) and the load average before and after. Figures belong in
+``docs/speed.md``) and the load average before and after. Below the table, per source, the
+cost of a sample without its correction and of a correction (from ``b = p + c/k`` at the two
+lowest rates, ``k`` samples per 50-ms correction), and what a correction may cost for the AHRS
+to match VQF at each rate, ``(VQF − p)·k`` (``docs/speed.md``, "the floor at 50 and 100 Hz").
+Figures belong in
 ``docs/speed.md`` (row ``bench-compare``) with the CPU, the path and the load.
 """
 
@@ -181,6 +185,36 @@ def time_vqf(vqf, ts, gyr, acc, mag):
     return seconds
 
 
+# The AHRS corrects once every CORRECTION_PERIOD seconds (src/ahrs/lowpass.rs), i.e. every
+# round(CORRECTION_PERIOD·fs) samples (half away from zero, as the library rounds).
+CORRECTION_PERIOD = 0.05
+
+
+def samples_per_correction(fs):
+    return max(1, math.floor(CORRECTION_PERIOD * fs + 0.5))
+
+
+def correction_budget(rows):
+    """Per source with two rates: the cost of a sample without its correction `p` and of a
+    correction `c` (µs), from `b = p + c/k` at the two lowest rates (`k` samples per
+    correction), and what a correction may cost for the AHRS to match VQF at each rate,
+    `(v − p)·k` (docs/speed.md, "the floor at 50 and 100 Hz")."""
+    out = {}
+    for source in sorted({r["source"] for r in rows}):
+        rs = sorted((r for r in rows if r["source"] == source), key=lambda r: r["rate"])
+        if len(rs) < 2:
+            continue
+        (b1, k1), (b2, k2) = [(r["bingham_us"], samples_per_correction(r["rate"])) for r in rs[:2]]
+        if k1 == k2:
+            continue
+        c = (b1 - b2) / (1.0 / k1 - 1.0 / k2)
+        p = b1 - c / k1
+        out[source] = {"sample_us": p, "correction_us": c, "from": [rs[0]["rate"], rs[1]["rate"]],
+                       "budget_us": [[r["rate"], (r["vqf_us"] - p) * samples_per_correction(r["rate"])]
+                                     for r in rs]}
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("data_dir", nargs="?", default=None)
@@ -270,12 +304,19 @@ def main(argv=None):
     print()
     print(f"µs per sample, median of {args.repeats} rounds; ratio = Bingham / VQF (below 1: "
           f"the AHRS is faster); ratio range over the rounds")
+    budget = correction_budget(rows)
+    for source, d in budget.items():
+        rates_s = ", ".join(f"{fs:.0f} Hz {b:.2f} µs" for fs, b in d["budget_us"])
+        print(f"{source}: a sample without its correction {d['sample_us']:.2f} µs, a correction "
+              f"{d['correction_us']:.2f} µs (from the {d['from'][0]:.0f} and {d['from'][1]:.0f} Hz "
+              f"rows); what a correction may cost for 1.0×: {rates_s}")
     print(f"load average after: {load_after[0]:.2f} {load_after[1]:.2f} {load_after[2]:.2f}")
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"cpu": cpu_model(), "kernel_path": path, "kernel_path_why": why,
                        "load_before": load_before, "load_after": load_after,
-                       "repeats": args.repeats, "rows": rows}, f, indent=1)
+                       "repeats": args.repeats, "rows": rows,
+                       "correction_budget": budget}, f, indent=1)
         print(f"wrote {args.json}")
 
 
