@@ -727,7 +727,8 @@ fn backward_pass(
         if start.is_none() {
             // the field's reference (norm and dip, what the disturbance test compares with)
             // from the forward pass, not from the last sample, which may lie in a disturbance
-            // (a magnet attached for the rest of the recording)
+            // (a magnet attached for the rest of the recording), with the field's variation the
+            // forward pass measured (which widens the heading evidence from the start on)
             if let Some(r) = &handoff.mag_reference {
                 back.set_mag_reference(r);
             }

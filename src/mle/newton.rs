@@ -108,6 +108,11 @@ impl Scratch {
 /// 2.4e-7 of the exact one at 80, 1e-12 from 1000 up): the steps barely change, the
 /// convergence test is the same, and no quadrature runs. The returned Hessian is then that
 /// approximation (it only serves as a warm start).
+///
+/// Where every concentration below the mode of the start is at least 2000 (d = 3, 4: the
+/// AHRS's fits), the series' own moment equation is solved first
+/// ([`asymptotic::series_root`]); its root is returned (one step) if the exact `ω` there meets
+/// `MLE_TOL`, with the series' Hessian, and the iteration above runs otherwise.
 pub(crate) fn newton(
     target: &[f64],
     from: NewtonStart,
