@@ -340,8 +340,8 @@ pub(super) fn series_root(t: &[f64], z: &mut [f64], dinv: &mut [[f64; 3]; 3]) ->
 /// [`series_root`] stops after a step of at most this relative size in every `a_i`. Its
 /// Jacobian `2I + O(s²)` changes by `O(s²) ≤ 1e-7` relative across a step (`s ≤ 2.5e-4`), so a
 /// step of relative size `δ` leaves an error of about `1e-7 δ` (Newton's quadratic term): below
-/// the rounding of `a` after a step of 1e-9. From the AHRS's warm starts (1–30 % off) the
-/// second step is that small.
+/// the rounding of `a` after a step of 1e-9. On the AHRS's fits the second step is that small
+/// (1 323 steps for 666 fits on the 50 Hz bench stream; the test's starts 1–30 % off as well).
 const SETTLED: f64 = 1e-9;
 
 /// `E f` for the leading `k × k` block of `e` (k ≤ 3).
