@@ -7,7 +7,9 @@
 //! z negative with spreads 1..1e6), "precision sum" the sum of two of them (the Bayes update),
 //! "moment" a second moment (λ positive, summing to 1, spreads 1..1e6). Each iteration
 //! decomposes the whole set of [`N`] matrices (copying each into the scratch first) and reports
-//! elements per second; divide the median time by [`N`] for one decomposition.
+//! elements per second; divide the median time by [`N`] for one decomposition. Two more sets,
+//! "exponent, warm" and "moment, warm", are what the AHRS's correction hands Jacobi: the
+//! matrix in the state's previous eigenbasis, nearly diagonal ([`warm_sets`]).
 
 use bingham::internals as linalg;
 
@@ -48,6 +50,26 @@ impl Uniform {
     fn rotated(&mut self, lambda: &[f64]) -> Vec<f64> {
         let n = lambda.len();
         let q = self.orthogonal(n);
+        let a = &q * DMatrix::from_diagonal(&DVector::from_column_slice(lambda)) * q.transpose();
+        let a = (&a + a.transpose()) * 0.5;
+        a.transpose().as_slice().to_vec()
+    }
+
+    /// `Q·diag(λ)·Qᵀ` with `Q` a rotation by a small angle (1e-4 to 1e-2 rad per plane, the Q
+    /// factor of `I + S`, `S` skew-symmetric): what the AHRS's warm path hands Jacobi, a
+    /// matrix in the state's previous eigenbasis.
+    fn nearly_diagonal(&mut self, lambda: &[f64]) -> Vec<f64> {
+        let n = lambda.len();
+        let eps = 10f64.powf(-4.0 + 2.0 * self.next());
+        let mut s = DMatrix::zeros(n, n);
+        for i in 0..n {
+            for j in i + 1..n {
+                let x = eps * self.normal();
+                s[(i, j)] = x;
+                s[(j, i)] = -x;
+            }
+        }
+        let q = (DMatrix::identity(n, n) + s).qr().q();
         let a = &q * DMatrix::from_diagonal(&DVector::from_column_slice(lambda)) * q.transpose();
         let a = (&a + a.transpose()) * 0.5;
         a.transpose().as_slice().to_vec()
@@ -102,6 +124,31 @@ fn sets(n: usize) -> Vec<(&'static str, Vec<Vec<f64>>)> {
     ]
 }
 
+/// The AHRS's warm path (n = 4): a posterior exponent (every `z` below the mode in the
+/// thousands, the concentrations of a spread of a degree or so) and a composed second moment
+/// (eigenvalues 1 and 1e-6 to 1e-3), each nearly diagonal in the basis Jacobi receives.
+fn warm_sets() -> Vec<(&'static str, Vec<Vec<f64>>)> {
+    let mut r = Uniform(20261129);
+    let exponent: Vec<Vec<f64>> = (0..N)
+        .map(|_| {
+            let mut z: Vec<f64> = (0..3).map(|_| -1e3 * 10f64.powf(2.0 * r.next())).collect();
+            z.sort_by(f64::total_cmp);
+            z.push(0.0);
+            r.nearly_diagonal(&z)
+        })
+        .collect();
+    let moment: Vec<Vec<f64>> = (0..N)
+        .map(|_| {
+            let mut w: Vec<f64> = (0..3).map(|_| 10f64.powf(-6.0 + 3.0 * r.next())).collect();
+            w.push(1.0);
+            let s: f64 = w.iter().sum();
+            let w: Vec<f64> = w.iter().map(|x| x / s).collect();
+            r.nearly_diagonal(&w)
+        })
+        .collect();
+    vec![("exponent, warm", exponent), ("moment, warm", moment)]
+}
+
 type Solver = fn(usize, &mut [f64], &mut [f64], &mut [f64], &mut [f64]);
 
 fn run<const NN: usize, const N2: usize, const D: usize>(set: &[Vec<f64>], solve: Solver) -> f64 {
@@ -125,6 +172,11 @@ fn bench(c: &mut Criterion) {
         });
         g.bench_function(format!("4x4 {name} general"), |b| {
             b.iter(|| run::<16, 8, 4>(&set, linalg::jacobi_general))
+        });
+    }
+    for (name, set) in warm_sets() {
+        g.bench_function(format!("4x4 {name}"), |b| {
+            b.iter(|| run::<16, 8, 4>(&set, linalg::jacobi_in_place))
         });
     }
     for (name, set) in sets(2) {
