@@ -20,13 +20,19 @@
 //! variance still starts at `bias_std²`).
 //!
 //! The product is formed in the tangent space of the forward mode with the stated (calibrated)
-//! covariances of both passes ([`Ahrs::orientation_covariance`]): with `δ` the rotation vector
+//! covariances of both passes before the heading's coupling to the tilt (the errors each
+//! filter models; [`Ahrs::orientation_covariance`] without its last step): with `δ` the rotation vector
 //! (world frame) from the forward mode to the backward one, `C_s = (C_f⁻¹ + C_b⁻¹)⁻¹`, the
 //! smoothed mode `exp(C_f (C_f + C_b)⁻¹ δ / 2) ⊗ q_f` and its covariance `C_s` (computed as
 //! `C_f − C_f (C_f + C_b)⁻¹ C_f`, which stays finite when the backward pass knows nothing).
 //! A backward state farther from the forward one than the two covariances allow (squared
 //! Mahalanobis distance above [`DEFAULT_GATE`]) has its covariance widened until it is not.
 //! The gyroscope bias is smoothed the same way from the two passes' estimates and covariances.
+//! The smoothed covariance output then takes the coupling (module `ahrs::uncertainty`) with the
+//! reference the backward pass was given: the tilt error the two passes share — an
+//! accelerometer's offset tilts both alike — leaves the heading by `tan(dip)` times it in the
+//! smoothed estimate as in each pass, but taken into the product it would move the heading by
+//! the passes' tilt difference, which is not what their heading errors differ by.
 //!
 //! Approximations (docs/design.md): the AHRS low-passes the accelerometer (`acc_tau`) and the
 //! magnetometer (`mag_tau`) and corrects every 50 ms, so a pass's state holds sample `k`'s own
@@ -67,7 +73,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use nalgebra::{Matrix3, Matrix4, Vector3, Vector4};
 
-use crate::ahrs::{Ahrs, AhrsParams, MagReference, LATENCY_ESTIMATE};
+use crate::ahrs::{with_heading_from_tilt, Ahrs, AhrsParams, MagReference, LATENCY_ESTIMATE};
 use crate::error::{Error, Result};
 use crate::quaternion::q4;
 
@@ -363,7 +369,7 @@ pub fn smooth_with(
         return Ok(());
     }
     let want_bias = out.bias.is_some() || options.bias == BiasMode::SecondPass;
-    let (mut fwd, mut bias) = run(params, options, input, want_bias, true)?;
+    let (mut fwd, mut bias, mut k) = run(params, options, input, want_bias, true)?;
     if options.bias == BiasMode::SecondPass {
         // the gyroscope minus the smoothed bias, the passes again: the bias estimates then
         // start at the smoothed bias instead of zero
@@ -381,8 +387,9 @@ pub fn smooth_with(
             ..*input
         };
         drop(fwd);
-        let (fwd2, bias2) = run(params, options, &input2, true, true)?;
+        let (fwd2, bias2, k2) = run(params, options, &input2, true, true)?;
         fwd = fwd2;
+        k = k2;
         let mut second = bias2.unwrap_or_default();
         // the bias output: the first passes' smoothed bias plus the second's residual
         for (b, f) in second.iter_mut().zip(&first) {
@@ -397,15 +404,16 @@ pub fn smooth_with(
     for (o, f) in out.quat.iter_mut().zip(&fwd) {
         *o = f.q;
     }
+    // the smoothed covariance with the heading's coupling to the tilt (module documentation)
+    let stated = |f: &Forward| with_heading_from_tilt(&unpack(&f.c), k);
     if let Some(s) = out.spread {
         for (o, f) in s.iter_mut().zip(&fwd) {
-            let c = f.c.map(f64::from);
-            *o = (c[0] + c[3] + c[5]).max(0.0).sqrt();
+            *o = stated(f).trace().max(0.0).sqrt();
         }
     }
     if let Some(c) = out.covariance {
         for (o, f) in c.iter_mut().zip(&fwd) {
-            let m = unpack(&f.c);
+            let m = stated(f);
             for i in 0..3 {
                 for j in 0..3 {
                     o[3 * i + j] = m[(i, j)];
@@ -590,7 +598,7 @@ fn forward_pass(
             .map_err(|e| prefix(e, &format!("sample {k}")))?;
         store.states.push(Forward {
             q: ahrs.quaternion(),
-            c: pack9(&ahrs.orientation_covariance()?),
+            c: pack9(&ahrs.filter_covariance()?),
         });
         if exact {
             store.exponents.push(exponent(&ahrs)?);
@@ -685,7 +693,7 @@ fn backward_pass(
             let qb = back.reversed_prediction(dt, &g, &far);
             store.states.push(Forward {
                 q: qb,
-                c: pack9(&back.orientation_covariance()?),
+                c: pack9(&back.filter_covariance()?),
             });
             if exact {
                 // the backward exponent turned to k: p(q) = p_{k+1}(q ⊗ dq*)
@@ -906,14 +914,15 @@ fn split_at(fwd: &mut Pass, at: usize) -> (Span<'_>, Span<'_>) {
 /// its pass is done, forms the product at the backward pass's chunks as they come; one thread
 /// if the second cannot be started, with the same result (the product at a sample is a
 /// function of the two passes' states there alone). Passes run one after the other form the
-/// product afterwards, on two threads from [`PARALLEL_PRODUCT`] samples on.
+/// product afterwards, on two threads from [`PARALLEL_PRODUCT`] samples on. Also returns the
+/// heading's coupling to the tilt for the output ([`coupling`]).
 fn run(
     params: &AhrsParams,
     options: &SmoothOptions,
     input: &SmoothInput<'_>,
     want_bias: bool,
     threads: bool,
-) -> Result<(Vec<Forward>, Option<Vec<ForwardBias>>)> {
+) -> Result<(Vec<Forward>, Option<Vec<ForwardBias>>, f64)> {
     let n = input.gyr.len();
     let exact = options.fusion == Fusion::Bingham;
     let has_mag = input
@@ -979,9 +988,10 @@ fn run(
     })?;
     if let Some(r) = back_result {
         r?;
-        return Ok((fwd.states, fwd.bias));
+        return Ok((fwd.states, fwd.bias, coupling(handoff.as_ref())));
     }
     // the passes one after the other: the backward pass's chunks kept, then the product
+    let k = coupling(handoff.as_ref());
     let h = handoff
         .ok_or_else(|| Error::Numerical("the smoother's forward pass gave no handoff".into()))?;
     let mut chunks = Vec::new();
@@ -1019,7 +1029,15 @@ fn run(
             all.apply(options, c);
         }
     }
-    Ok((fwd.states, fwd.bias))
+    Ok((fwd.states, fwd.bias, k))
+}
+
+/// The heading's coupling to the tilt (module `ahrs::uncertainty`) with the magnetic reference
+/// of the handoff (0 without one).
+fn coupling(handoff: Option<&Handoff>) -> f64 {
+    handoff
+        .and_then(|h| h.mag_reference)
+        .map_or(0.0, |r| r.heading_per_tilt())
 }
 
 #[cfg(test)]
@@ -1176,9 +1194,10 @@ mod tests {
 
     /// The smoother with one thread and with two: every smoothed state and bias bit for bit.
     fn assert_threads_agree(params: &AhrsParams, options: &SmoothOptions, input: &SmoothInput<'_>) {
-        let (f1, b1) = run(params, options, input, true, false).unwrap();
-        let (f2, b2) = run(params, options, input, true, true).unwrap();
+        let (f1, b1, k1) = run(params, options, input, true, false).unwrap();
+        let (f2, b2, k2) = run(params, options, input, true, true).unwrap();
         let (b1, b2) = (b1.unwrap(), b2.unwrap());
+        assert_eq!(k1, k2);
         assert_eq!((f1.len(), b1.len()), (input.gyr.len(), input.gyr.len()));
         for k in 0..input.gyr.len() {
             assert_eq!(f1[k].q, f2[k].q, "sample {k}");

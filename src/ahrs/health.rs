@@ -147,6 +147,8 @@ pub(super) struct Innovations {
     pub(super) tilt_scale: Option<f64>,
     /// The heading's `ν_m` over its mean if the model held.
     pub(super) heading_scale: Option<f64>,
+    /// The prior state's variance (rad², as the model has it) per tilt axis, with the tilt.
+    pub(super) tilt_variance: Option<f64>,
 }
 
 impl Innovations {
@@ -227,6 +229,7 @@ impl HealthState {
                     self.tilt_innovation = *angle;
                     out.tilt = Some(nis);
                     out.tilt_scale = Some(scale);
+                    out.tilt_variance = Some(p);
                 }
                 Innovation::Heading { angle, .. } => {
                     self.heading.push(nis, alpha);

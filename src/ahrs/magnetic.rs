@@ -58,6 +58,14 @@ pub(crate) struct MagReference {
     inhomogeneity: Inhomogeneity,
 }
 
+impl MagReference {
+    /// How far a tilt error about north turns the heading the magnetometer gives with this
+    /// reference (module `uncertainty`).
+    pub(crate) fn heading_per_tilt(&self) -> f64 {
+        super::uncertainty::heading_per_tilt(self.norm_dip.1)
+    }
+}
+
 /// The magnetometer's state in the AHRS.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Magnetic {
@@ -79,6 +87,8 @@ pub(super) struct Magnetic {
     restart: bool,
     /// The variation of the used samples' norm and dip (module `uncertainty`).
     inhomogeneity: Inhomogeneity,
+    /// The state's stated tilt variance (rad² per axis) as of the last correction.
+    tilt_variance: f64,
 }
 
 impl Magnetic {
@@ -93,6 +103,7 @@ impl Magnetic {
             lp: None,
             restart: false,
             inhomogeneity: Inhomogeneity::default(),
+            tilt_variance: 0.0,
         }
     }
 
@@ -106,6 +117,23 @@ impl Magnetic {
         let c = dip.cos();
         // a field within 5° of the vertical gives no heading (heading_error): cap the factor
         self.inhomogeneity.variance() / (c * c).max(0.0076)
+    }
+
+    /// The heading reference's variance (rad²) as the stated covariance takes it: the local
+    /// field's own directional variance, without the state's tilt error
+    /// ([`Inhomogeneity::field_variance`]), over `cos²(dip)`; 0 without a reference.
+    pub(super) fn stated_heading_reference_variance(&self) -> f64 {
+        let Some((_, dip)) = self.reference else {
+            return 0.0;
+        };
+        let c = dip.cos();
+        self.inhomogeneity.field_variance() / (c * c).max(0.0076)
+    }
+
+    /// The state's stated tilt variance (rad² per axis) after a correction, which the
+    /// following samples' dips carry.
+    pub(super) fn set_tilt_variance(&mut self, v: f64) {
+        self.tilt_variance = v;
     }
 
     /// Whether a reference exists and the current phase is undisturbed.
@@ -239,7 +267,8 @@ impl Magnetic {
         }
         let k = c.mag_ref;
         self.reference = Some((rn + k * (norm - rn), rd + k * (dip - rd)));
-        self.inhomogeneity.push(raw_norm, raw_dip, h);
+        self.inhomogeneity
+            .push(raw_norm, raw_dip, h, self.tilt_variance);
         let mw = q4::rotate(q, m);
         match self.lp.as_mut() {
             Some(lp) => (0..repeat).for_each(|_| lp.step(&mw)),

@@ -117,6 +117,7 @@ pub use params::{
 use rest::Rest;
 use state::SampleState;
 use timing::SensorTimes;
+pub(crate) use uncertainty::with_heading_from_tilt;
 use vec3::{cross3, norm3, scale3, UP};
 
 /// The largest rotation (rad) one gyroscope sample may turn (`|gyr|·sample_time`): a million
@@ -130,6 +131,14 @@ const SNAP: f64 = 1e-6;
 /// values near the largest double has an overflowing norm: it counts as no sample).
 fn usable3(v: &[f64; 3]) -> bool {
     v.iter().all(|x| x.is_finite()) && norm3(v).is_finite()
+}
+
+/// A 3×3 matrix as 9 row-major values, made exactly symmetric.
+fn symmetric9(c: &Matrix3<f64>) -> [f64; 9] {
+    std::array::from_fn(|k| {
+        let (i, j) = (k / 3, k % 3);
+        0.5 * (c[(i, j)] + c[(j, i)])
+    })
 }
 
 /// The AHRS. Create it with [`Ahrs::new`], feed it samples with [`Ahrs::update`] (or
@@ -261,28 +270,29 @@ impl Ahrs {
     /// the truth and the estimate), the square roots of the variances of
     /// [`Ahrs::orientation_covariance`] along those directions and of its trace: the state's
     /// own spread with the process noise accumulated since the last correction, scaled by
-    /// what the innovations show and widened by the heading reference's error (module
-    /// `uncertainty`). Before the first sample: that of the uniform distribution.
+    /// what the innovations show, widened by the heading reference's error and with the
+    /// heading error a tilt error brings through the magnetometer (module `uncertainty`).
+    /// Before the first sample: that of the uniform distribution.
     pub fn angular_spread(&self, out: &mut [f64; 4]) -> Result<()> {
         let Some(f) = &self.filter else {
             crate::observation::spread_from_omega(&[0.25; 4], out);
             return Ok(());
         };
-        // the variances along the principal directions only (not the 3×3 covariance): the
-        // body-frame directions, their vertical components in the world, the pending noise
-        // along them
+        // the stated covariance's variances along the principal directions (world frame):
+        // their sum is its trace
         let core = f.core4()?;
         let (m, _) = core.params();
         let q = core.mode();
         let r = q4::to_matrix(&q);
+        let r = Matrix3::from_fn(|i, j| r[i][j]);
         let dirs = bias::principal_directions(m, &q);
-        let z: [f64; 3] = std::array::from_fn(|i| {
-            let u = &dirs[i];
-            r[2][0] * u.x + r[2][1] * u.y + r[2][2] * u.z
-        });
         let pending = bias::psd(&self.sample_state.bias.pending);
-        let noise: [f64; 3] = std::array::from_fn(|i| (dirs[i].transpose() * pending * dirs[i])[0]);
-        let v = uncertainty::stated_variances(&z, &noise, &self.stated_parts());
+        let c = uncertainty::stated(&r, &dirs, &pending, &self.stated_parts());
+        let c = uncertainty::with_heading_from_tilt(&c, self.heading_per_tilt());
+        let v: [f64; 3] = std::array::from_fn(|i| {
+            let d = r * dirs[i];
+            (d.transpose() * c * d)[0].max(0.0)
+        });
         for (o, x) in out.iter_mut().zip(&v) {
             *o = x.sqrt();
         }
@@ -301,22 +311,35 @@ impl Ahrs {
     /// total [`Ahrs::angular_spread`]. Before the first sample: that of a uniform
     /// orientation's spread.
     pub fn orientation_covariance(&self) -> Result<[f64; 9]> {
-        let world = match self.stated_covariance()? {
-            Some(c) => c,
+        let k = self.heading_per_tilt();
+        Ok(symmetric9(&match self.stated_covariance()? {
+            Some(c) => uncertainty::with_heading_from_tilt(&c, k),
             // the uniform distribution: ω_i = 1/4
             None => Matrix3::identity(),
-        };
-        let mut out = [0.0; 9];
-        for i in 0..3 {
-            for j in 0..3 {
-                out[3 * i + j] = 0.5 * (world[(i, j)] + world[(j, i)]);
-            }
-        }
-        Ok(out)
+        }))
     }
 
-    /// The stated covariance (world frame, module `uncertainty`); `None` before the first
-    /// sample.
+    /// The covariance of the errors the filter models (rad², 3×3 row-major, world frame): the
+    /// tilt and the heading the magnetometer shows; [`Ahrs::orientation_covariance`] before the
+    /// heading's coupling to the tilt ([`Ahrs::heading_per_tilt`]). Crate-internal: the
+    /// offline smoother (`crate::smoother`) multiplies the two passes with it.
+    pub(crate) fn filter_covariance(&self) -> Result<[f64; 9]> {
+        Ok(symmetric9(
+            &self.stated_covariance()?.unwrap_or_else(Matrix3::identity),
+        ))
+    }
+
+    /// How far a tilt error about north turns the heading the magnetometer gives: `tan` of the
+    /// reference field's dip above the horizon; 0 without a reference (module `uncertainty`).
+    pub(crate) fn heading_per_tilt(&self) -> f64 {
+        self.sample_state
+            .mag
+            .reference_dip()
+            .map_or(0.0, uncertainty::heading_per_tilt)
+    }
+
+    /// The stated covariance (world frame, module `uncertainty`) before the heading's coupling
+    /// to the tilt; `None` before the first sample.
     fn stated_covariance(&self) -> Result<Option<Matrix3<f64>>> {
         let Some(f) = &self.filter else {
             return Ok(None);
@@ -344,7 +367,7 @@ impl Ahrs {
             var: std::array::from_fn(|i| 4.0 * s.omega[i]),
             scales: s.calib.scales(),
             tilt_ref: s.calib.tilt_reference_variance(),
-            heading_ref: s.mag.heading_reference_variance(),
+            heading_ref: s.mag.stated_heading_reference_variance(),
             gap: s.gyro.gap_stated,
         }
     }
@@ -888,6 +911,11 @@ fn step(
         // accelerometer error only as far as the evidence it gives counts)
         let gravity_dev = gravity_excess.map(|x| x * p.acc_reject / p.gravity / (1.0 + x * x));
         s.calib.correction(t, &nu, gravity_dev);
+        if let Some(v) = nu.tilt_variance {
+            let (st, _) = s.calib.scales();
+            s.mag
+                .set_tilt_variance(st * v + s.calib.tilt_reference_variance());
+        }
         // 5.5 one exact Bayes product with every exponent
         let update = correction::update(core, &prior, &evidence)?;
         // 5.6 the bias from the move of the mode

@@ -14,8 +14,11 @@
 //! states the covariance of the filter with its noises scaled by the innovations' own average,
 //! tilt and heading apart (the accelerometer and the magnetometer are different sensors with
 //! different errors): `s_t` and `s_h`, averages of those ratios over [`CALIBRATION_TIME`],
-//! blended in from 1 over [`STARTUP_TIME`] of corrections. The estimate does not change; the
-//! stated spread does.
+//! blended in from 1 over [`STARTUP_TIME`] of corrections. An innovation enters those averages
+//! with the same blend's weight: while the state settles, its innovations show its start (a
+//! bias being learned, the first seconds' error), not the noises' scale, and at full weight
+//! they would hold the stated spread up for the averages' whole memory after the start. The
+//! estimate does not change; the stated spread does.
 //!
 //! A principal direction `u` of the state (world frame) takes the factor
 //! `s(u) = s_t (1 − u_z²) + s_h u_z²`, the share of its variance in tilt and in heading.
@@ -39,7 +42,21 @@
 //! variance gains the field's directional variance ([`Inhomogeneity`]: the variance over
 //! [`CALIBRATION_TIME`] of the dip and of the relative norm, each smoothed over
 //! [`SMOOTH_TIME`] so that the sensor's white noise does not count), over `cos²(dip)` (a
-//! horizontal deviation `δ` turns the heading by `δ/(|m| cos dip)`).
+//! horizontal deviation `δ` turns the heading by `δ/(|m| cos dip)`). The dip is measured
+//! against the state's "up", so its variance also holds the state's own tilt error; the
+//! stated covariance takes the dip's variance less the average stated tilt variance
+//! ([`Inhomogeneity::field_variance`]), because it carries that error itself, as follows.
+//!
+//! The heading the magnetometer gives is the azimuth of the averaged field mapped to the world
+//! with the state's tilt, and a tilt error `φ_y` about north (the reference field's horizontal
+//! direction, world y) turns that azimuth: the heading the filter settles on is off by
+//! `tan(dip)·φ_y` beyond what its heading evidence shows (`dip` above the horizon: a field
+//! pointing down, as in the northern hemisphere, gives `−tan|dip|`). The filter's own
+//! covariance takes the heading evidence as independent of the tilt; the stated one is
+//! `A C Aᵀ`, `A = I + tan(dip) e_z e_yᵀ` (2.1 at a dip of 65°: a tilt error there is twice as
+//! large in the heading). This is what carries an accelerometer's offset, which tilts the state
+//! unseen by the innovations (the tilt reference's variance above), into the heading's
+//! spread.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -96,13 +113,14 @@ impl Calibration {
         if let Some(x) = gravity_dev {
             self.gravity.push(x * x, alpha);
         }
+        let settled = |time: f64| 1.0 - (-time / STARTUP_TIME).exp();
         if let Some(x) = nu.tilt_scale {
-            self.tilt.push(x, alpha);
             self.tilt_time += t;
+            self.tilt.push(x, alpha * settled(self.tilt_time));
         }
         if let Some(x) = nu.heading_scale {
-            self.heading.push(x, alpha);
             self.heading_time += t;
+            self.heading.push(x, alpha * settled(self.heading_time));
         }
         self.cached = Some(self.compute_scales());
     }
@@ -167,7 +185,8 @@ impl Parts {
 /// The stated variances along the principal directions, from their world-frame vertical
 /// components `z` and the pending noise's variances along them `noise` (rad²): `v_i =
 /// s_i (var_i + noise_i) + (1 − s_i) gap + heading_ref z_i² + tilt_ref (1 − z_i²)`, `s_i` the
-/// direction's factor. Their sum is the trace of [`stated`]'s covariance (the total spread²).
+/// direction's factor: the diagonal of [`stated`]'s covariance, in the principal basis, before
+/// the heading's coupling to the tilt.
 pub(super) fn stated_variances(z: &[f64; 3], noise: &[f64; 3], parts: &Parts) -> [f64; 3] {
     let tilt_ref = parts.tilt_ref;
     std::array::from_fn(|i| {
@@ -189,9 +208,9 @@ pub(super) fn stated_variances(z: &[f64; 3], noise: &[f64; 3], parts: &Parts) ->
 /// variances about the world axes. With `U` the directions as columns and `K` the covariance in
 /// the principal basis (its diagonal [`stated_variances`] without the references, its
 /// off-diagonal the pending noise's `(UᵀNU)_ij √(s_i s_j)`), `C = (RU) K (RU)ᵀ` plus the
-/// references: `trace C = Σ v` of [`stated_variances`]. The quadratic forms of the noise are
-/// taken in the body frame (`Uᵀ N U`, what the world frame's `(RU)ᵀ (R N Rᵀ)(RU)` is in exact
-/// arithmetic).
+/// references (`trace = Σ v` of [`stated_variances`]): the covariance of the errors the filter
+/// models, before the heading's coupling to the tilt ([`with_heading_from_tilt`]). The quadratic forms of the noise are taken in the body frame
+/// (`Uᵀ N U`, what the world frame's `(RU)ᵀ (R N Rᵀ)(RU)` is in exact arithmetic).
 pub(super) fn stated(
     r: &Matrix3<f64>,
     dirs: &[Vector3<f64>; 3],
@@ -222,6 +241,29 @@ pub(super) fn stated(
     c
 }
 
+/// `tan` of the reference field's dip `dip` (rad above the horizon): how far a tilt error
+/// about north turns the heading the magnetometer gives ([`with_heading_from_tilt`]). The
+/// cosine is held at cos 85° or more, as the heading reference's variance holds it (a field
+/// within 5° of the vertical gives no heading).
+pub(crate) fn heading_per_tilt(dip: f64) -> f64 {
+    dip.sin() / dip.cos().max(0.0076f64.sqrt())
+}
+
+/// The covariance `c` (world frame) of the errors the filter models — the tilt and the
+/// heading the magnetometer shows — turned into that of the orientation's: the heading the
+/// magnetometer shows is the averaged field's azimuth, which a tilt error `φ_y` about north
+/// turns by `−k φ_y` (`k` = `tan` of the field's dip above the horizon), so the heading the
+/// filter settles on is off by `k φ_y` more: `φ = A φ_filter`, `A = I + k e_z e_yᵀ`, and
+/// `A c Aᵀ` (module documentation).
+pub(crate) fn with_heading_from_tilt(c: &Matrix3<f64>, k: f64) -> Matrix3<f64> {
+    if k == 0.0 {
+        return *c;
+    }
+    let mut a = Matrix3::identity();
+    a[(2, 1)] = k;
+    a * c * a.transpose()
+}
+
 /// The variation of the field's norm and dip over the motion, which shows how far the local
 /// field's direction varies (module documentation): the norm (relative) and the dip of the
 /// undisturbed samples, smoothed over [`SMOOTH_TIME`], and their exponentially weighted mean and
@@ -236,11 +278,16 @@ pub(super) struct Inhomogeneity {
     norm2: Average,
     dip: Average,
     dip2: Average,
+    /// The average of the state's stated tilt variance (rad² per axis) at the samples: the
+    /// part of the dip's variance that is the state's own tilt error.
+    tilt: Average,
 }
 
 impl Inhomogeneity {
-    /// One undisturbed sample of norm `norm` and dip `dip` (rad), `h` seconds long.
-    pub(super) fn push(&mut self, norm: f64, dip: f64, h: f64) {
+    /// One undisturbed sample of norm `norm` and dip `dip` (rad, measured against the
+    /// state's "up"), `h` seconds long, taken while the state's stated tilt variance is
+    /// `tilt_var` (rad² per axis).
+    pub(super) fn push(&mut self, norm: f64, dip: f64, h: f64, tilt_var: f64) {
         if self.smoothed == 0.0 {
             self.smooth = (norm, dip);
         } else {
@@ -261,6 +308,7 @@ impl Inhomogeneity {
         self.norm2.push(n * n, alpha);
         self.dip.push(self.smooth.1, alpha);
         self.dip2.push(self.smooth.1 * self.smooth.1, alpha);
+        self.tilt.push(tilt_var, alpha);
     }
 
     /// `self` with the averages of `learned` (another pass over the same recording, module
@@ -272,6 +320,7 @@ impl Inhomogeneity {
             norm2: learned.norm2,
             dip: learned.dip,
             dip2: learned.dip2,
+            tilt: learned.tilt,
             ..self
         }
     }
@@ -289,6 +338,22 @@ impl Inhomogeneity {
         };
         0.5 * (norm + var(&self.dip, &self.dip2))
     }
+
+    /// The local field's own directional variance per direction (rad²): as
+    /// [`Inhomogeneity::variance`], with the dip's variance less the state's own tilt error's
+    /// (the dip is measured against the state's "up"; the stated covariance has that error in
+    /// its tilt, and turns it into the heading's error itself).
+    pub(super) fn field_variance(&self) -> f64 {
+        let var = |m: &Average, m2: &Average| (m2.value() - m.value() * m.value()).max(0.0);
+        let mean = self.norm.value();
+        let norm = if mean > 0.0 {
+            var(&self.norm, &self.norm2) / (mean * mean)
+        } else {
+            0.0
+        };
+        let dip = (var(&self.dip, &self.dip2) - self.tilt.value()).max(0.0);
+        0.5 * (norm + dip)
+    }
 }
 
 #[cfg(test)]
@@ -302,7 +367,7 @@ mod tests {
         let h = 0.01;
         for k in 0..(seconds / h) as usize {
             let phase = 2.0 * std::f64::consts::PI * k as f64 * h / period;
-            m.push(1.0 + 0.05 * phase.sin(), 1.0 + 0.05 * phase.cos(), h);
+            m.push(1.0 + 0.05 * phase.sin(), 1.0 + 0.05 * phase.cos(), h, 0.0);
         }
         m
     }
@@ -318,7 +383,7 @@ mod tests {
         let v = learned.variance();
         assert!((0.8e-3..1.3e-3).contains(&v), "{v:e}");
         let mut fresh = Inhomogeneity::default();
-        fresh.push(1.0, 0.9, 0.01);
+        fresh.push(1.0, 0.9, 0.01, 0.0);
         assert_eq!(fresh.variance(), 0.0);
         let handed = fresh.with_averages_of(&learned);
         assert_eq!(handed.variance(), v);
@@ -328,12 +393,84 @@ mod tests {
         // the variance
         let mut later = handed;
         for _ in 0..6000 {
-            later.push(1.0, 1.0, 0.01);
+            later.push(1.0, 1.0, 0.01, 0.0);
         }
         assert!(
             later.variance() < 0.5 * v,
             "{:e} vs {v:e}",
             later.variance()
         );
+    }
+
+    /// The coupling against the geometry it stands for: a tilt error `a` about north maps the
+    /// reference field off its azimuth; the heading correction that brings the azimuth back
+    /// leaves a heading error, which must be `tan(dip)·a` ([`heading_per_tilt`]), for fields
+    /// of either hemisphere. And the covariance of the filter's errors is carried over to the
+    /// orientation's as that map says.
+    #[test]
+    fn a_tilt_error_about_north_turns_the_heading_by_tan_dip() {
+        use nalgebra::{Rotation3, Vector3};
+        for dip_deg in [-70.0f64, -45.0, -10.0, 0.0, 30.0, 65.0] {
+            let dip = dip_deg.to_radians();
+            let field = Vector3::new(0.0, dip.cos(), dip.sin());
+            for a in [1e-4f64, -3e-4] {
+                let truth_to_estimate = Rotation3::from_scaled_axis(Vector3::new(0.0, -a, 0.0));
+                let mapped = truth_to_estimate * field;
+                // the heading correction Rz(γ) that brings the mapped field's azimuth to 0
+                let gamma = mapped.x.atan2(mapped.y);
+                let settled =
+                    Rotation3::from_scaled_axis(Vector3::new(0.0, 0.0, gamma)) * truth_to_estimate;
+                // the error rotation vector φ of q_true = exp(φ/2) ⊗ q̂
+                let phi = settled.inverse().scaled_axis();
+                let k = heading_per_tilt(dip);
+                assert!(
+                    (phi.y - a).abs() < 1e-9 * (1.0 + k.abs()),
+                    "{dip_deg}: {phi:?}"
+                );
+                assert!(
+                    (phi.z - k * a).abs() < 2e-7 * a.abs() * (1.0 + k.abs()),
+                    "{dip_deg}: {} vs {}",
+                    phi.z,
+                    k * a
+                );
+            }
+            let mut c = Matrix3::from_diagonal(&Vector3::new(2e-4, 3e-4, 5e-4));
+            c[(1, 2)] = 1e-5;
+            c[(2, 1)] = 1e-5;
+            let k = heading_per_tilt(dip);
+            let out = with_heading_from_tilt(&c, k);
+            let heading = 5e-4 + 2.0 * k * 1e-5 + k * k * 3e-4;
+            assert!((out[(2, 2)] - heading).abs() < 1e-15 * (1.0 + k * k));
+            assert!((out[(1, 2)] - (1e-5 + k * 3e-4)).abs() < 1e-17 * (1.0 + k.abs()));
+            assert_eq!((out[(0, 0)], out[(1, 1)]), (2e-4, 3e-4));
+        }
+        // a field within 5° of the vertical: the factor is held
+        assert!(heading_per_tilt(89.9f64.to_radians()) < 11.5);
+    }
+
+    /// The dip is measured against the state's "up": the field's own variance leaves out the
+    /// state's tilt variance, which the stated covariance carries itself; the filter's
+    /// [`Inhomogeneity::variance`] keeps it.
+    #[test]
+    fn the_fields_own_variance_leaves_out_the_states_tilt_error() {
+        let h = 0.01;
+        let mut m = Inhomogeneity::default();
+        let mut still = Inhomogeneity::default();
+        for k in 0..12_000 {
+            // the dip moves by a state's tilt error of about 0.02 rad RMS, the norm not at all
+            let e = 0.02 * 2f64.sqrt() * (2.0 * std::f64::consts::PI * k as f64 * h / 10.0).sin();
+            m.push(1.0, 0.9 + e, h, 4e-4);
+            still.push(1.0, 0.9 + e, h, 0.0);
+        }
+        // the smoothed dip's variance: 0.02² through the 1-s smoothing, 1/(1 + (2π/10)²)
+        let dip = 2.0 * m.variance();
+        assert!((2.7e-4..3.0e-4).contains(&dip), "{dip:e}");
+        assert_eq!(still.variance(), m.variance());
+        assert!(
+            m.field_variance() < 0.1 * m.variance(),
+            "{:e}",
+            m.field_variance()
+        );
+        assert_eq!(still.field_variance(), still.variance());
     }
 }
