@@ -287,8 +287,7 @@ impl Ahrs {
         let r = Matrix3::from_fn(|i, j| r[i][j]);
         let dirs = bias::principal_directions(m, &q);
         let pending = bias::psd(&self.sample_state.bias.pending);
-        let c = uncertainty::stated(&r, &dirs, &pending, &self.stated_parts());
-        let c = uncertainty::with_heading_from_tilt(&c, self.heading_per_tilt());
+        let c = uncertainty::stated(&r, &dirs, &pending, &self.stated_parts(true));
         let v: [f64; 3] = std::array::from_fn(|i| {
             let d = r * dirs[i];
             (d.transpose() * c * d)[0].max(0.0)
@@ -311,36 +310,29 @@ impl Ahrs {
     /// total [`Ahrs::angular_spread`]. Before the first sample: that of a uniform
     /// orientation's spread.
     pub fn orientation_covariance(&self) -> Result<[f64; 9]> {
-        let k = self.heading_per_tilt();
-        Ok(symmetric9(&match self.stated_covariance()? {
-            Some(c) => uncertainty::with_heading_from_tilt(&c, k),
-            // the uniform distribution: ω_i = 1/4
-            None => Matrix3::identity(),
-        }))
+        Ok(symmetric9(
+            // before the first sample the uniform distribution: ω_i = 1/4
+            &self
+                .stated_covariance(true)?
+                .unwrap_or_else(Matrix3::identity),
+        ))
     }
 
     /// The covariance of the errors the filter models (rad², 3×3 row-major, world frame): the
     /// tilt and the heading the magnetometer shows; [`Ahrs::orientation_covariance`] before the
-    /// heading's coupling to the tilt ([`Ahrs::heading_per_tilt`]). Crate-internal: the
+    /// heading's coupling to the tilt. Crate-internal: the
     /// offline smoother (`crate::smoother`) multiplies the two passes with it.
     pub(crate) fn filter_covariance(&self) -> Result<[f64; 9]> {
         Ok(symmetric9(
-            &self.stated_covariance()?.unwrap_or_else(Matrix3::identity),
+            &self
+                .stated_covariance(false)?
+                .unwrap_or_else(Matrix3::identity),
         ))
     }
 
-    /// How far a tilt error about north turns the heading the magnetometer gives: `tan` of the
-    /// reference field's dip above the horizon; 0 without a reference (module `uncertainty`).
-    pub(crate) fn heading_per_tilt(&self) -> f64 {
-        self.sample_state
-            .mag
-            .reference_dip()
-            .map_or(0.0, uncertainty::heading_per_tilt)
-    }
-
-    /// The stated covariance (world frame, module `uncertainty`) before the heading's coupling
-    /// to the tilt; `None` before the first sample.
-    fn stated_covariance(&self) -> Result<Option<Matrix3<f64>>> {
+    /// The stated covariance (world frame, module `uncertainty`), with the heading's coupling to
+    /// the tilt if `coupled`; `None` before the first sample.
+    fn stated_covariance(&self, coupled: bool) -> Result<Option<Matrix3<f64>>> {
         let Some(f) = &self.filter else {
             return Ok(None);
         };
@@ -356,19 +348,26 @@ impl Ahrs {
             &r,
             &dirs,
             &pending,
-            &self.stated_parts(),
+            &self.stated_parts(coupled),
         )))
     }
 
-    /// What the stated covariance is made of besides the principal directions.
-    fn stated_parts(&self) -> uncertainty::Parts {
+    /// What the stated covariance is made of besides the principal directions, with the
+    /// heading's coupling to the tilt if `coupled`.
+    fn stated_parts(&self, coupled: bool) -> uncertainty::Parts {
         let s = &self.sample_state;
+        let p = &self.params;
+        let coupling = match s.mag.reference_dip() {
+            Some(dip) if coupled => uncertainty::Coupling::new(dip, p.acc_tau, p.mag_tau),
+            _ => uncertainty::Coupling::NONE,
+        };
         uncertainty::Parts {
             var: std::array::from_fn(|i| 4.0 * s.omega[i]),
             scales: s.calib.scales(),
             tilt_ref: s.calib.tilt_reference_variance(),
             heading_ref: s.mag.stated_heading_reference_variance(),
             gap: s.gyro.gap_stated,
+            coupling,
         }
     }
 

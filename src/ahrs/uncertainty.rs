@@ -54,9 +54,12 @@
 //! pointing down, as in the northern hemisphere, gives `−tan|dip|`). The filter's own
 //! covariance takes the heading evidence as independent of the tilt; the stated one is
 //! `A C Aᵀ`, `A = I + tan(dip) e_z e_yᵀ` (2.1 at a dip of 65°: a tilt error there is twice as
-//! large in the heading). This is what carries an accelerometer's offset, which tilts the state
-//! unseen by the innovations (the tilt reference's variance above), into the heading's
-//! spread.
+//! large in the heading), for the references' tilt errors, which change slower than the
+//! heading's average: this is what carries an accelerometer's offset, which tilts the state
+//! unseen by the innovations (the tilt reference's variance above), into the heading's spread.
+//! The filter's own tilt error is correlated over about the tilt average's `acc_tau`, and the
+//! heading's average over `mag_tau` passes only the share `f = acc_tau/(acc_tau + mag_tau)` of
+//! it (1/3 by default): `(1 − f) C + f A C Aᵀ` ([`Coupling`]).
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -170,6 +173,9 @@ pub(super) struct Parts {
     /// The variance (rad² per axis) that gyroscope gaps have added: physical, in the filter's
     /// covariance unscaled, so stated as it is, not scaled.
     pub(super) gap: f64,
+    /// The heading's coupling to the tilt ([`Coupling::NONE`] for the covariance of the errors
+    /// the filter models).
+    pub(super) coupling: Coupling,
 }
 
 impl Parts {
@@ -208,8 +214,8 @@ pub(super) fn stated_variances(z: &[f64; 3], noise: &[f64; 3], parts: &Parts) ->
 /// variances about the world axes. With `U` the directions as columns and `K` the covariance in
 /// the principal basis (its diagonal [`stated_variances`] without the references, its
 /// off-diagonal the pending noise's `(UᵀNU)_ij √(s_i s_j)`), `C = (RU) K (RU)ᵀ` plus the
-/// references (`trace = Σ v` of [`stated_variances`]): the covariance of the errors the filter
-/// models, before the heading's coupling to the tilt ([`with_heading_from_tilt`]). The quadratic forms of the noise are taken in the body frame
+/// references (`trace = Σ v` of [`stated_variances`]), each with the heading's coupling to the
+/// tilt ([`Coupling`]; none: the covariance of the errors the filter models). The quadratic forms of the noise are taken in the body frame
 /// (`Uᵀ N U`, what the world frame's `(RU)ᵀ (R N Rᵀ)(RU)` is in exact arithmetic).
 pub(super) fn stated(
     r: &Matrix3<f64>,
@@ -234,9 +240,14 @@ pub(super) fn stated(
             0.5 * (n[(i, j)] + n[(j, i)]) * (s[i] * s[j]).sqrt()
         }
     });
-    let mut c = d * k * d.transpose();
-    c[(0, 0)] += tilt_ref;
-    c[(1, 1)] += tilt_ref;
+    // the filter's own errors, the tilt reference's (slow: an accelerometer's offset and
+    // scale, what linear acceleration leaves in the average), the heading reference's (a
+    // heading error itself: the coupling leaves it as it is)
+    let own = parts.coupling.fast(&(d * k * d.transpose()));
+    let tilt = parts.coupling.slow(&Matrix3::from_diagonal(&Vector3::new(
+        tilt_ref, tilt_ref, 0.0,
+    )));
+    let mut c = own + tilt;
     c[(2, 2)] += parts.heading_ref;
     c
 }
@@ -249,12 +260,12 @@ pub(crate) fn heading_per_tilt(dip: f64) -> f64 {
     dip.sin() / dip.cos().max(0.0076f64.sqrt())
 }
 
-/// The covariance `c` (world frame) of the errors the filter models — the tilt and the
-/// heading the magnetometer shows — turned into that of the orientation's: the heading the
-/// magnetometer shows is the averaged field's azimuth, which a tilt error `φ_y` about north
-/// turns by `−k φ_y` (`k` = `tan` of the field's dip above the horizon), so the heading the
-/// filter settles on is off by `k φ_y` more: `φ = A φ_filter`, `A = I + k e_z e_yᵀ`, and
-/// `A c Aᵀ` (module documentation).
+/// The covariance `c` (world frame) of errors the filter models — the tilt and the heading the
+/// magnetometer shows — turned into the orientation's: the heading the magnetometer shows is
+/// the averaged field's azimuth, which a tilt error `φ_y` about north turns by `−k φ_y` (`k` =
+/// `tan` of the field's dip above the horizon), so the heading the filter settles on is off by
+/// `k φ_y` more: `φ = A φ_filter`, `A = I + k e_z e_yᵀ`, and `A c Aᵀ` (module documentation).
+/// For a tilt error that changes slower than the heading's average.
 pub(crate) fn with_heading_from_tilt(c: &Matrix3<f64>, k: f64) -> Matrix3<f64> {
     if k == 0.0 {
         return *c;
@@ -262,6 +273,52 @@ pub(crate) fn with_heading_from_tilt(c: &Matrix3<f64>, k: f64) -> Matrix3<f64> {
     let mut a = Matrix3::identity();
     a[(2, 1)] = k;
     a * c * a.transpose()
+}
+
+/// The heading's coupling to the tilt (module documentation): `k` = `tan` of the reference
+/// field's dip above the horizon ([`heading_per_tilt`]), and the share `f` of the filter's own
+/// tilt error's variance that the heading's average passes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Coupling {
+    /// `tan` of the reference field's dip (0: no coupling).
+    pub(crate) k: f64,
+    /// `acc_tau/(acc_tau + mag_tau)`: the filter's own tilt error is correlated over about the
+    /// tilt average's time constant `acc_tau`, and the heading takes the field averaged over
+    /// `mag_tau`; a first-order average of time constant `τ_m` passes the share `τ_a/(τ_a + τ_m)`
+    /// of the variance of an error correlated over `τ_a` (exponentially), and that share of its
+    /// covariance with the error itself.
+    pub(crate) fast: f64,
+}
+
+impl Coupling {
+    /// No coupling: the covariance of the errors the filter models.
+    pub(crate) const NONE: Coupling = Coupling { k: 0.0, fast: 0.0 };
+
+    /// The coupling of a reference dip (rad above the horizon) with the tilt's and the
+    /// heading's averaging times `acc_tau`, `mag_tau` (s).
+    pub(crate) fn new(dip: f64, acc_tau: f64, mag_tau: f64) -> Coupling {
+        let t = acc_tau + mag_tau;
+        Coupling {
+            k: heading_per_tilt(dip),
+            fast: if t > 0.0 { acc_tau / t } else { 1.0 },
+        }
+    }
+
+    /// A tilt error that changes slower than the heading's average (the references'):
+    /// [`with_heading_from_tilt`].
+    pub(crate) fn slow(&self, c: &Matrix3<f64>) -> Matrix3<f64> {
+        with_heading_from_tilt(c, self.k)
+    }
+
+    /// The filter's own tilt error, of which the heading's average passes the share `f`: the
+    /// heading gains `k L`, `L` the averaged `φ_y` with `Var L = f c_yy` and `Cov(L, φ) ≈ f
+    /// c_y·`, which is `(1 − f) c + f A c Aᵀ` (positive semi-definite with `c`).
+    pub(crate) fn fast(&self, c: &Matrix3<f64>) -> Matrix3<f64> {
+        if self.k == 0.0 || self.fast == 0.0 {
+            return *c;
+        }
+        c * (1.0 - self.fast) + with_heading_from_tilt(c, self.k) * self.fast
+    }
 }
 
 /// The variation of the field's norm and dip over the motion, which shows how far the local
@@ -472,5 +529,35 @@ mod tests {
             m.field_variance()
         );
         assert_eq!(still.field_variance(), still.variance());
+    }
+
+    /// The filter's own tilt error reaches the heading through its average: `(1 − f) c +
+    /// f A c Aᵀ`, the heading's variance gaining `f k² c_yy` (and `2 f k c_yz`), its covariance
+    /// with the tilt about north `f k c_yy`; the references' errors the whole `A c Aᵀ`; none
+    /// without a reference.
+    #[test]
+    fn the_filters_own_tilt_error_reaches_the_heading_through_its_average() {
+        let c = Matrix3::new(2e-4, 1e-5, -2e-5, 1e-5, 3e-4, 4e-5, -2e-5, 4e-5, 5e-4);
+        let dip = (-65.0f64).to_radians();
+        let cp = Coupling::new(dip, 1.5, 3.0);
+        assert!((cp.fast - 1.0 / 3.0).abs() < 1e-15);
+        assert_eq!(cp.k, heading_per_tilt(dip));
+        let (k, f) = (cp.k, cp.fast);
+        let out = cp.fast(&c);
+        let heading = 5e-4 + f * (2.0 * k * 4e-5 + k * k * 3e-4);
+        assert!(
+            (out[(2, 2)] - heading).abs() < 1e-18,
+            "{} vs {heading}",
+            out[(2, 2)]
+        );
+        assert!((out[(1, 2)] - (4e-5 + f * k * 3e-4)).abs() < 1e-18);
+        assert!((out[(0, 2)] - (-2e-5 + f * k * 1e-5)).abs() < 1e-18);
+        for (i, j) in [(0, 0), (1, 1), (0, 1)] {
+            assert!((out[(i, j)] - c[(i, j)]).abs() < 1e-19, "({i}, {j})");
+        }
+        assert!(out.symmetric_eigenvalues().min() > 0.0);
+        assert_eq!(cp.slow(&c), with_heading_from_tilt(&c, k));
+        assert_eq!(Coupling::NONE.fast(&c), c);
+        assert_eq!(Coupling::NONE.slow(&c), c);
     }
 }
