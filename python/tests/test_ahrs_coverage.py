@@ -51,8 +51,9 @@ def test_broad_heading_and_total_are_near_calibrated():
     p = ahrs_coverage.pooled([r for r in rows if r["name"] not in ahrs_coverage.APART])
     # (within 1x, within 2x, calibrated 1x, calibrated 2x, RMS error / RMS spread)
     heading, tilt, total = p["heading"], p["tilt"], p["total"]
-    assert 0.60 <= heading[0] <= 0.75 and heading[1] >= 0.88, heading
-    assert 0.60 <= total[0] <= 0.75 and total[1] >= 0.92, total
+    # issue 34's target (0.5-0.85 within 1x, 0.95 within 2x), not far from the calibrated 0.68
+    assert 0.60 <= heading[0] <= 0.85 and heading[1] >= 0.95, heading
+    assert 0.60 <= total[0] <= 0.85 and total[1] >= 0.95, total
     # tilt: the right share within 1x, heavy tails within 2x (trials 02, 07, 09)
     assert 0.60 <= tilt[0] <= 0.75 and tilt[1] >= 0.85, tilt
 

@@ -365,6 +365,7 @@ impl Ahrs {
             var: std::array::from_fn(|i| 4.0 * s.omega[i]),
             scales: s.calib.scales(),
             tilt_ref: s.calib.tilt_reference_variance(),
+            tilt_ref_steady: s.calib.steady_tilt_reference_variance(),
             heading_ref: s.mag.stated_heading_reference_variance(),
             gap: s.gyro.gap_stated,
             coupling,

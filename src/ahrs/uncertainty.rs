@@ -54,12 +54,13 @@
 //! pointing down, as in the northern hemisphere, gives `−tan|dip|`). The filter's own
 //! covariance takes the heading evidence as independent of the tilt; the stated one is
 //! `A C Aᵀ`, `A = I + tan(dip) e_z e_yᵀ` (2.1 at a dip of 65°: a tilt error there is twice as
-//! large in the heading), for the references' tilt errors, which change slower than the
-//! heading's average: this is what carries an accelerometer's offset, which tilts the state
-//! unseen by the innovations (the tilt reference's variance above), into the heading's spread.
-//! The filter's own tilt error is correlated over about the tilt average's `acc_tau`, and the
-//! heading's average over `mag_tau` passes only the share `f = acc_tau/(acc_tau + mag_tau)` of
-//! it (1/3 by default): `(1 − f) C + f A C Aᵀ` ([`Coupling`]).
+//! large in the heading), for a tilt error that changes slower than the heading's average: the
+//! tilt reference's steady part, the squared mean of the norm's deviation (an accelerometer's
+//! offset or scale error, which tilts the state unseen by the innovations). The filter's own
+//! tilt error is correlated over about the tilt average's `acc_tau`, and so is what varies
+//! with the motion about that mean; of such an error the heading's average over `mag_tau`
+//! passes only the share `f = acc_tau/(acc_tau + mag_tau)` (1/3 by default): `(1 − f) C +
+//! f A C Aᵀ` ([`Coupling`]).
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -105,6 +106,8 @@ pub(super) struct Calibration {
     cached: Option<(f64, f64)>,
     /// The low-passed accelerometer's squared relative deviation from gravity.
     gravity: Average,
+    /// The low-passed accelerometer's relative deviation from gravity.
+    gravity_mean: Average,
 }
 
 impl Calibration {
@@ -115,6 +118,7 @@ impl Calibration {
         let alpha = (t / CALIBRATION_TIME).min(1.0);
         if let Some(x) = gravity_dev {
             self.gravity.push(x * x, alpha);
+            self.gravity_mean.push(x, alpha);
         }
         let settled = |time: f64| 1.0 - (-time / STARTUP_TIME).exp();
         if let Some(x) = nu.tilt_scale {
@@ -156,6 +160,14 @@ impl Calibration {
     pub(super) fn tilt_reference_variance(&self) -> f64 {
         self.gravity.value()
     }
+
+    /// The part of [`Calibration::tilt_reference_variance`] that is steady: the squared mean
+    /// deviation (an accelerometer's offset and scale error at the motion's attitudes); the
+    /// rest varies about it with the motion.
+    pub(super) fn steady_tilt_reference_variance(&self) -> f64 {
+        let m = self.gravity_mean.value();
+        (m * m).min(self.gravity.value())
+    }
 }
 
 /// What the stated covariance is made of (module documentation), besides the principal
@@ -168,6 +180,8 @@ pub(super) struct Parts {
     pub(super) scales: (f64, f64),
     /// The tilt reference's variance (rad² per horizontal axis).
     pub(super) tilt_ref: f64,
+    /// Its steady part ([`Calibration::steady_tilt_reference_variance`], at most `tilt_ref`).
+    pub(super) tilt_ref_steady: f64,
     /// The heading reference's variance (rad²).
     pub(super) heading_ref: f64,
     /// The variance (rad² per axis) that gyroscope gaps have added: physical, in the filter's
@@ -240,13 +254,19 @@ pub(super) fn stated(
             0.5 * (n[(i, j)] + n[(j, i)]) * (s[i] * s[j]).sqrt()
         }
     });
-    // the filter's own errors, the tilt reference's (slow: an accelerometer's offset and
-    // scale, what linear acceleration leaves in the average), the heading reference's (a
-    // heading error itself: the coupling leaves it as it is)
+    // the filter's own errors (correlated over about acc_tau), the tilt reference's (its
+    // steady part, an accelerometer's offset and scale error, changes slower than the heading's
+    // average; what varies with the motion about it, as fast as the filter's own), the heading
+    // reference's (a heading error itself: the coupling leaves it as it is)
     let own = parts.coupling.fast(&(d * k * d.transpose()));
-    let tilt = parts.coupling.slow(&Matrix3::from_diagonal(&Vector3::new(
-        tilt_ref, tilt_ref, 0.0,
-    )));
+    let steady = parts.tilt_ref_steady.clamp(0.0, tilt_ref.max(0.0));
+    let varying = tilt_ref - steady;
+    let tilt = parts
+        .coupling
+        .slow(&Matrix3::from_diagonal(&Vector3::new(steady, steady, 0.0)))
+        + parts.coupling.fast(&Matrix3::from_diagonal(&Vector3::new(
+            varying, varying, 0.0,
+        )));
     let mut c = own + tilt;
     c[(2, 2)] += parts.heading_ref;
     c
@@ -559,5 +579,24 @@ mod tests {
         assert_eq!(cp.slow(&c), with_heading_from_tilt(&c, k));
         assert_eq!(Coupling::NONE.fast(&c), c);
         assert_eq!(Coupling::NONE.slow(&c), c);
+    }
+
+    /// The tilt reference's steady part is the squared mean deviation: all of it for a
+    /// constant deviation (an accelerometer's offset), none of it for one that alternates about
+    /// 0 (linear acceleration that averages out over the motion).
+    #[test]
+    fn the_tilt_references_steady_part_is_its_squared_mean() {
+        let mut offset = Calibration::default();
+        let mut moving = Calibration::default();
+        let nu = Innovations::default();
+        for k in 0..2000 {
+            offset.correction(0.05, &nu, Some(0.01));
+            moving.correction(0.05, &nu, Some(if k % 2 == 0 { 0.01 } else { -0.01 }));
+        }
+        for c in [&offset, &moving] {
+            assert!((c.tilt_reference_variance() - 1e-4).abs() < 1e-12);
+        }
+        assert!((offset.steady_tilt_reference_variance() - 1e-4).abs() < 1e-12);
+        assert!(moving.steady_tilt_reference_variance() < 1e-8);
     }
 }
