@@ -28,11 +28,12 @@
 //! A backward state farther from the forward one than the two covariances allow (squared
 //! Mahalanobis distance above [`DEFAULT_GATE`]) has its covariance widened until it is not.
 //! The gyroscope bias is smoothed the same way from the two passes' estimates and covariances.
-//! The smoothed covariance output then takes the coupling (module `ahrs::uncertainty`) with the
-//! reference the backward pass was given: the tilt error the two passes share — an
-//! accelerometer's offset tilts both alike — leaves the heading by `tan(dip)` times it in the
-//! smoothed estimate as in each pass, but taken into the product it would move the heading by
-//! the passes' tilt difference, which is not what their heading errors differ by.
+//! The smoothed covariance output then takes the coupling (module `ahrs::uncertainty`) of the
+//! forward pass at the handoff (its reference's dip, its tilt reference's steady part, which
+//! takes the whole coupling, the rest the filter's share): the tilt error the two passes share —
+//! an accelerometer's offset tilts both alike — leaves the heading by `tan(dip)` times it in
+//! the smoothed estimate as in each pass, but taken into the product it would move the heading
+//! by the passes' tilt difference, which is not what their heading errors differ by.
 //!
 //! Approximations (docs/design.md): the AHRS low-passes the accelerometer (`acc_tau`) and the
 //! magnetometer (`mag_tau`) and corrects every 50 ms, so a pass's state holds sample `k`'s own
@@ -73,7 +74,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use nalgebra::{Matrix3, Matrix4, Vector3, Vector4};
 
-use crate::ahrs::{with_heading_from_tilt, Ahrs, AhrsParams, MagReference, LATENCY_ESTIMATE};
+use crate::ahrs::{Ahrs, AhrsParams, MagReference, StatedCoupling, LATENCY_ESTIMATE};
 use crate::error::{Error, Result};
 use crate::quaternion::q4;
 
@@ -405,7 +406,7 @@ pub fn smooth_with(
         *o = f.q;
     }
     // the smoothed covariance with the heading's coupling to the tilt (module documentation)
-    let stated = |f: &Forward| with_heading_from_tilt(&unpack(&f.c), k);
+    let stated = |f: &Forward| k.apply(&unpack(&f.c));
     if let Some(s) = out.spread {
         for (o, f) in s.iter_mut().zip(&fwd) {
             *o = stated(f).trace().max(0.0).sqrt();
@@ -478,6 +479,8 @@ struct Handoff {
     mag_latency: f64,
     /// Without a magnetometer: the forward pass's final state, the backward pass's start.
     state: Option<([f64; 16], [f64; 4])>,
+    /// The forward pass's heading coupling, which the smoothed covariance takes.
+    coupling: StatedCoupling,
 }
 
 impl Handoff {
@@ -513,6 +516,11 @@ impl Handoff {
             },
             mag_latency,
             state,
+            coupling: if options.forward_mag_reference {
+                ahrs.stated_coupling()
+            } else {
+                StatedCoupling::NONE
+            },
         })
     }
 }
@@ -922,7 +930,7 @@ fn run(
     input: &SmoothInput<'_>,
     want_bias: bool,
     threads: bool,
-) -> Result<(Vec<Forward>, Option<Vec<ForwardBias>>, f64)> {
+) -> Result<(Vec<Forward>, Option<Vec<ForwardBias>>, StatedCoupling)> {
     let n = input.gyr.len();
     let exact = options.fusion == Fusion::Bingham;
     let has_mag = input
@@ -1034,10 +1042,8 @@ fn run(
 
 /// The heading's coupling to the tilt (module `ahrs::uncertainty`) with the magnetic reference
 /// of the handoff (0 without one).
-fn coupling(handoff: Option<&Handoff>) -> f64 {
-    handoff
-        .and_then(|h| h.mag_reference)
-        .map_or(0.0, |r| r.heading_per_tilt())
+fn coupling(handoff: Option<&Handoff>) -> StatedCoupling {
+    handoff.map_or(StatedCoupling::NONE, |h| h.coupling)
 }
 
 #[cfg(test)]

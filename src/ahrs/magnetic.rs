@@ -58,14 +58,6 @@ pub(crate) struct MagReference {
     inhomogeneity: Inhomogeneity,
 }
 
-impl MagReference {
-    /// How far a tilt error about north turns the heading the magnetometer gives with this
-    /// reference (module `uncertainty`).
-    pub(crate) fn heading_per_tilt(&self) -> f64 {
-        super::uncertainty::heading_per_tilt(self.norm_dip.1)
-    }
-}
-
 /// The magnetometer's state in the AHRS.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Magnetic {

@@ -117,7 +117,7 @@ pub use params::{
 use rest::Rest;
 use state::SampleState;
 use timing::SensorTimes;
-pub(crate) use uncertainty::with_heading_from_tilt;
+pub(crate) use uncertainty::StatedCoupling;
 use vec3::{cross3, norm3, scale3, UP};
 
 /// The largest rotation (rad) one gyroscope sample may turn (`|gyr|·sample_time`): a million
@@ -328,6 +328,17 @@ impl Ahrs {
                 .stated_covariance(false)?
                 .unwrap_or_else(Matrix3::identity),
         ))
+    }
+
+    /// The heading's coupling to the tilt of the stated covariance now (module `uncertainty`),
+    /// to apply to another covariance of the errors the filter models. Crate-internal: the
+    /// offline smoother (`crate::smoother`) applies the forward pass's to the smoothed one.
+    pub(crate) fn stated_coupling(&self) -> StatedCoupling {
+        let p = self.stated_parts(true);
+        StatedCoupling {
+            coupling: p.coupling,
+            steady: p.tilt_ref_steady.clamp(0.0, p.tilt_ref.max(0.0)),
+        }
     }
 
     /// The stated covariance (world frame, module `uncertainty`), with the heading's coupling to

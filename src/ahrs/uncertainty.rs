@@ -310,6 +310,31 @@ pub(crate) struct Coupling {
     pub(crate) fast: f64,
 }
 
+/// The coupling of an AHRS's stated covariance as of one moment (module `smoother`: the forward
+/// pass's at the handoff, applied to the smoothed covariance): the [`Coupling`] and the tilt
+/// reference's steady variance (rad² per horizontal axis), which takes the whole coupling.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct StatedCoupling {
+    pub(crate) coupling: Coupling,
+    pub(crate) steady: f64,
+}
+
+impl StatedCoupling {
+    /// No coupling.
+    pub(crate) const NONE: StatedCoupling = StatedCoupling {
+        coupling: Coupling::NONE,
+        steady: 0.0,
+    };
+
+    /// A covariance `c` of the errors the filter models, whose tilt reference's steady part is
+    /// `steady`, with the coupling: the steady part the whole ([`Coupling::slow`]), the rest
+    /// the filter's share ([`Coupling::fast`]).
+    pub(crate) fn apply(&self, c: &Matrix3<f64>) -> Matrix3<f64> {
+        let s = Matrix3::from_diagonal(&Vector3::new(self.steady, self.steady, 0.0));
+        self.coupling.fast(&(c - s)) + self.coupling.slow(&s)
+    }
+}
+
 impl Coupling {
     /// No coupling: the covariance of the errors the filter models.
     pub(crate) const NONE: Coupling = Coupling { k: 0.0, fast: 0.0 };
