@@ -2018,9 +2018,11 @@ enum bingham_status bingham_ahrs_set_state(struct bingham_ahrs *a,
  * of the variances of `bingham_ahrs_orientation_covariance()` along those directions and of its
  * trace. The state's own spread (`bingham_angular_spread()` of the state, plus the process
  * noise since the last correction) scaled by what the accelerometer's and the magnetometer's
- * innovations show (tilt and heading apart) and widened by the errors of the tilt and heading
- * references that the sensors show (docs/design.md, "Stated uncertainty"; coverage measured in
- * docs/accuracy/ahrs.md, "The stated uncertainty").
+ * innovations show (tilt and heading apart), widened by the errors of the tilt and heading
+ * references that the sensors show, and with the heading error a tilt error brings through the
+ * magnetometer (`tan(dip)` times the tilt about north: tilt and heading are correlated)
+ * (docs/design.md, "Stated uncertainty"; coverage measured in docs/accuracy/ahrs.md, "The
+ * stated uncertainty").
  *
  * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `spread`), `BINGHAM_ERR_NUMERICAL` (the moments
  * of an extremely concentrated state, e.g. one set with `bingham_ahrs_set_state()` near the

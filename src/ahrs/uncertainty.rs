@@ -430,15 +430,8 @@ impl Inhomogeneity {
     /// The field's directional variance per direction (rad²): the mean of the relative
     /// norm's and the dip's variances (0 before there are any).
     pub(super) fn variance(&self) -> f64 {
-        let var = |m: &Average, m2: &Average| (m2.value() - m.value() * m.value()).max(0.0);
-        // the norm's variance relative to its mean's square
-        let mean = self.norm.value();
-        let norm = if mean > 0.0 {
-            var(&self.norm, &self.norm2) / (mean * mean)
-        } else {
-            0.0
-        };
-        0.5 * (norm + var(&self.dip, &self.dip2))
+        let (norm, dip) = self.variances();
+        0.5 * (norm + dip)
     }
 
     /// The local field's own directional variance per direction (rad²): as
@@ -446,6 +439,13 @@ impl Inhomogeneity {
     /// (the dip is measured against the state's "up"; the stated covariance has that error in
     /// its tilt, and turns it into the heading's error itself).
     pub(super) fn field_variance(&self) -> f64 {
+        let (norm, dip) = self.variances();
+        0.5 * (norm + (dip - self.tilt.value()).max(0.0))
+    }
+
+    /// The relative norm's variance (relative to its mean's square) and the dip's (rad²); 0
+    /// before there are any.
+    fn variances(&self) -> (f64, f64) {
         let var = |m: &Average, m2: &Average| (m2.value() - m.value() * m.value()).max(0.0);
         let mean = self.norm.value();
         let norm = if mean > 0.0 {
@@ -453,8 +453,7 @@ impl Inhomogeneity {
         } else {
             0.0
         };
-        let dip = (var(&self.dip, &self.dip2) - self.tilt.value()).max(0.0);
-        0.5 * (norm + dip)
+        (norm, var(&self.dip, &self.dip2))
     }
 }
 
