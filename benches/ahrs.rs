@@ -63,6 +63,29 @@ fn bench_ahrs(c: &mut Criterion) {
     g.finish();
 }
 
+/// The readouts of the stated uncertainty after 30 s of the 100 Hz stream: the spread along
+/// the principal directions and the 3×3 covariance (both from the stated covariance, module
+/// `ahrs::uncertainty`), what a batch call with spreads adds per sample.
+fn bench_readout(c: &mut Criterion) {
+    let data = stream();
+    let mut a = Ahrs::new(&AhrsParams::new(DT)).unwrap();
+    for s in &data[..3000] {
+        a.update(&s.gyr, &s.acc, Some(&s.mag)).unwrap();
+    }
+    let mut g = c.benchmark_group("ahrs_readout");
+    g.bench_function("angular_spread", |b| {
+        let mut out = [0.0; 4];
+        b.iter(|| {
+            black_box(&a).angular_spread(&mut out).unwrap();
+            black_box(out)
+        })
+    });
+    g.bench_function("orientation_covariance", |b| {
+        b.iter(|| black_box(&a).orientation_covariance().unwrap())
+    });
+    g.finish();
+}
+
 fn bench_vector(c: &mut Criterion) {
     let mut g = c.benchmark_group("vector");
     let dirs: Vec<[f64; 3]> = stream()
@@ -111,6 +134,6 @@ criterion_group! {
     config = Criterion::default()
         .warm_up_time(std::time::Duration::from_millis(500))
         .measurement_time(std::time::Duration::from_secs(3));
-    targets = bench_ahrs, bench_vector
+    targets = bench_ahrs, bench_readout, bench_vector
 }
 criterion_main!(benches);

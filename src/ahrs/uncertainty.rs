@@ -287,12 +287,24 @@ pub(crate) fn heading_per_tilt(dip: f64) -> f64 {
 /// `k φ_y` more: `φ = A φ_filter`, `A = I + k e_z e_yᵀ`, and `A c Aᵀ` (module documentation).
 /// For a tilt error that changes slower than the heading's average.
 pub(crate) fn with_heading_from_tilt(c: &Matrix3<f64>, k: f64) -> Matrix3<f64> {
-    if k == 0.0 {
-        return *c;
+    coupled(c, k, 1.0)
+}
+
+/// `c + w (A c Aᵀ − c)`, `A = I + k e_z e_yᵀ`, from `A`'s structure: `(A c Aᵀ)_ij = c_ij +
+/// k δ_i2 c_1j + k δ_j2 c_i1 + k² δ_i2 δ_j2 c_11` (rows and columns from 0; nine operations
+/// instead of two matrix products).
+fn coupled(c: &Matrix3<f64>, k: f64, w: f64) -> Matrix3<f64> {
+    let mut out = *c;
+    if k == 0.0 || w == 0.0 {
+        return out;
     }
-    let mut a = Matrix3::identity();
-    a[(2, 1)] = k;
-    a * c * a.transpose()
+    let wk = w * k;
+    for j in 0..3 {
+        out[(2, j)] += wk * c[(1, j)];
+        out[(j, 2)] += wk * c[(j, 1)];
+    }
+    out[(2, 2)] += wk * k * c[(1, 1)];
+    out
 }
 
 /// The heading's coupling to the tilt (module documentation): `k` = `tan` of the reference
@@ -359,10 +371,7 @@ impl Coupling {
     /// heading gains `k L`, `L` the averaged `φ_y` with `Var L = f c_yy` and `Cov(L, φ) ≈ f
     /// c_y·`, which is `(1 − f) c + f A c Aᵀ` (positive semi-definite with `c`).
     pub(crate) fn fast(&self, c: &Matrix3<f64>) -> Matrix3<f64> {
-        if self.k == 0.0 || self.fast == 0.0 {
-            return *c;
-        }
-        c * (1.0 - self.fast) + with_heading_from_tilt(c, self.k) * self.fast
+        coupled(c, self.k, self.fast)
     }
 }
 
