@@ -320,8 +320,8 @@ impl Ahrs {
 
     /// The covariance of the errors the filter models (rad², 3×3 row-major, world frame): the
     /// tilt and the heading the magnetometer shows; [`Ahrs::orientation_covariance`] before the
-    /// heading's coupling to the tilt. Crate-internal: the
-    /// offline smoother (`crate::smoother`) multiplies the two passes with it.
+    /// heading's coupling to the tilt. Crate-internal: the offline smoother (`crate::smoother`)
+    /// multiplies the two passes with it.
     pub(crate) fn filter_covariance(&self) -> Result<[f64; 9]> {
         Ok(symmetric9(
             &self

@@ -340,9 +340,17 @@ impl StatedCoupling {
 
     /// A covariance `c` of the errors the filter models, whose tilt reference's steady part is
     /// `steady`, with the coupling: the steady part the whole ([`Coupling::slow`]), the rest
-    /// the filter's share ([`Coupling::fast`]).
+    /// the filter's share ([`Coupling::fast`]). A `c` narrower than the steady part (a product
+    /// of two passes, which counts their shared error as independent) keeps as steady at most
+    /// its smallest eigenvalue, so that `c − steady` and the result stay positive
+    /// semi-definite.
     pub(crate) fn apply(&self, c: &Matrix3<f64>) -> Matrix3<f64> {
-        let s = Matrix3::from_diagonal(&Vector3::new(self.steady, self.steady, 0.0));
+        let diag = |v: f64| Matrix3::from_diagonal(&Vector3::new(v, v, 0.0));
+        let mut steady = self.steady.max(0.0);
+        if steady > 0.0 && (c - diag(steady)).cholesky().is_none() {
+            steady = steady.min(c.symmetric_eigenvalues().min().max(0.0));
+        }
+        let s = diag(steady);
         self.coupling.fast(&(c - s)) + self.coupling.slow(&s)
     }
 }
@@ -631,5 +639,25 @@ mod tests {
         }
         assert!((offset.steady_tilt_reference_variance() - 1e-4).abs() < 1e-12);
         assert!(moving.steady_tilt_reference_variance() < 1e-8);
+    }
+
+    /// The smoother's coupling keeps its output a covariance when the product is narrower
+    /// than the steady tilt error it is given, and applies the whole coupling to that error
+    /// otherwise.
+    #[test]
+    fn a_stated_coupling_keeps_a_narrow_covariance_positive_semi_definite() {
+        let sc = StatedCoupling {
+            coupling: Coupling::new((-65.0f64).to_radians(), 1.5, 3.0),
+            steady: 1e-4,
+        };
+        let narrow = Matrix3::from_diagonal(&Vector3::new(4e-5, 5e-5, 2e-5));
+        let out = sc.apply(&narrow);
+        assert!(out.symmetric_eigenvalues().min() >= -1e-18, "{out}");
+        let wide = Matrix3::from_diagonal(&Vector3::new(3e-4, 4e-4, 2e-4));
+        let s = Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 0.0));
+        let expected = sc.coupling.fast(&(wide - s)) + sc.coupling.slow(&s);
+        assert!((sc.apply(&wide) - expected).norm() < 1e-20);
+        assert!(sc.apply(&wide).symmetric_eigenvalues().min() > 0.0);
+        assert_eq!(StatedCoupling::NONE.apply(&wide), wide);
     }
 }
