@@ -49,6 +49,10 @@ pub(super) const RECOVER_TIME: f64 = 0.5;
 /// Rotation rate (rad/s, 20°/s) above which a steady disturbance counts toward a new reference.
 pub(super) const NEW_REF_RATE: f64 = 0.35;
 
+/// `cos²` of 85°, the least `cos²(dip)` by which a heading's variance is divided (module
+/// `uncertainty`: the reference's variance, the heading's coupling to the tilt).
+pub(super) const MIN_COS2_DIP: f64 = 0.0076;
+
 /// What one pass over a recording hands another (module `smoother`): the field's reference
 /// (norm, dip in rad) and the variation of the field it measured over the motion (module
 /// `uncertainty`), which widens the heading evidence by the local field's deviations.
@@ -103,23 +107,25 @@ impl Magnetic {
     /// from the norm's and the dip's variation, over `cos²(dip)` (module `uncertainty`); 0
     /// without a reference.
     pub(super) fn heading_reference_variance(&self) -> f64 {
-        let Some((_, dip)) = self.reference else {
-            return 0.0;
-        };
-        let c = dip.cos();
-        // a field within 5° of the vertical gives no heading (heading_error): cap the factor
-        self.inhomogeneity.variance() / (c * c).max(0.0076)
+        self.over_cos2_dip(self.inhomogeneity.variance())
     }
 
     /// The heading reference's variance (rad²) as the stated covariance takes it: the local
     /// field's own directional variance, without the state's tilt error
     /// ([`Inhomogeneity::field_variance`]), over `cos²(dip)`; 0 without a reference.
     pub(super) fn stated_heading_reference_variance(&self) -> f64 {
+        self.over_cos2_dip(self.inhomogeneity.field_variance())
+    }
+
+    /// A directional variance `v` (rad²) of the field turned into the heading's: over
+    /// `cos²(dip)` of the reference, held at [`MIN_COS2_DIP`] (a field within 5° of the
+    /// vertical gives no heading, `heading_error`); 0 without a reference.
+    fn over_cos2_dip(&self, v: f64) -> f64 {
         let Some((_, dip)) = self.reference else {
             return 0.0;
         };
         let c = dip.cos();
-        self.inhomogeneity.field_variance() / (c * c).max(0.0076)
+        v / (c * c).max(MIN_COS2_DIP)
     }
 
     /// The state's stated tilt variance (rad² per axis) after a correction, which the

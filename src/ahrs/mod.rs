@@ -337,7 +337,7 @@ impl Ahrs {
         let p = self.stated_parts(true);
         StatedCoupling {
             coupling: p.coupling,
-            steady: p.tilt_ref_steady.clamp(0.0, p.tilt_ref.max(0.0)),
+            steady: p.tilt_ref_steady,
         }
     }
 

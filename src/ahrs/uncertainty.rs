@@ -65,6 +65,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::health::{Average, Innovations};
+use super::magnetic::MIN_COS2_DIP;
 
 /// The time constant (s) of the innovation averages that scale the stated covariance: long
 /// enough to hold hundreds of corrections' worth of independent innovations (the tilt's and
@@ -180,7 +181,7 @@ pub(super) struct Parts {
     pub(super) scales: (f64, f64),
     /// The tilt reference's variance (rad² per horizontal axis).
     pub(super) tilt_ref: f64,
-    /// Its steady part ([`Calibration::steady_tilt_reference_variance`], at most `tilt_ref`).
+    /// Its steady part ([`Calibration::steady_tilt_reference_variance`]: from 0 to `tilt_ref`).
     pub(super) tilt_ref_steady: f64,
     /// The heading reference's variance (rad²).
     pub(super) heading_ref: f64,
@@ -259,7 +260,7 @@ pub(super) fn stated(
     // average; what varies with the motion about it, as fast as the filter's own), the heading
     // reference's (a heading error itself: the coupling leaves it as it is)
     let own = parts.coupling.fast(&(d * k * d.transpose()));
-    let steady = parts.tilt_ref_steady.clamp(0.0, tilt_ref.max(0.0));
+    let steady = parts.tilt_ref_steady;
     let varying = tilt_ref - steady;
     let tilt = parts
         .coupling
@@ -277,7 +278,7 @@ pub(super) fn stated(
 /// cosine is held at cos 85° or more, as the heading reference's variance holds it (a field
 /// within 5° of the vertical gives no heading).
 pub(crate) fn heading_per_tilt(dip: f64) -> f64 {
-    dip.sin() / dip.cos().max(0.0076f64.sqrt())
+    dip.sin() / dip.cos().max(MIN_COS2_DIP.sqrt())
 }
 
 /// The covariance `c` (world frame) of errors the filter models — the tilt and the heading the
