@@ -31,7 +31,7 @@ use super::gyro::Turn;
 use super::latency::turn_forward;
 use super::lowpass::{Coeffs, InertialLowPass};
 use super::params::AhrsParams;
-use super::uncertainty::Inhomogeneity;
+use super::uncertainty::{Inhomogeneity, MIN_COS2_DIP};
 use super::vec3::{dot3, norm3, UP};
 use crate::filter::Core;
 use crate::quaternion::q4;
@@ -48,10 +48,6 @@ pub(super) const RECOVER_TIME: f64 = 0.5;
 
 /// Rotation rate (rad/s, 20°/s) above which a steady disturbance counts toward a new reference.
 pub(super) const NEW_REF_RATE: f64 = 0.35;
-
-/// `cos²` of 85°, the least `cos²(dip)` by which a heading's variance is divided (module
-/// `uncertainty`: the reference's variance, the heading's coupling to the tilt).
-pub(super) const MIN_COS2_DIP: f64 = 0.0076;
 
 /// What one pass over a recording hands another (module `smoother`): the field's reference
 /// (norm, dip in rad) and the variation of the field it measured over the motion (module

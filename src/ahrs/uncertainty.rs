@@ -65,7 +65,6 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::health::{Average, Innovations};
-use super::magnetic::MIN_COS2_DIP;
 
 /// The time constant (s) of the innovation averages that scale the stated covariance: long
 /// enough to hold hundreds of corrections' worth of independent innovations (the tilt's and
@@ -272,6 +271,11 @@ pub(super) fn stated(
     c[(2, 2)] += parts.heading_ref;
     c
 }
+
+/// `cos²` of 85°, the least `cos²(dip)` by which a heading's variance is divided: the heading
+/// reference's variance (module `magnetic`) and the heading's coupling to the tilt
+/// ([`heading_per_tilt`]); a field within 5° of the vertical gives no heading.
+pub(super) const MIN_COS2_DIP: f64 = 0.0076;
 
 /// `tan` of the reference field's dip `dip` (rad above the horizon): how far a tilt error
 /// about north turns the heading the magnetometer gives ([`with_heading_from_tilt`]). The
