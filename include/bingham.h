@@ -1992,7 +1992,8 @@ enum bingham_status bingham_ahrs_state(const struct bingham_ahrs *a, double *m, 
 
 /**
  * Replaces the orientation estimate by `Bingham(m, z)`: a known start or a re-initialization.
- * The bias estimate, the low-pass filters and the magnetic reference are kept. Called before
+ * The bias estimate, the low-pass filters and the magnetic reference are kept (the new
+ * state's coupling to the bias estimate's error starts afresh). Called before
  * the first sample, it replaces the self-initialization (the first sample then only primes
  * the low-pass filters).
  *
@@ -2020,8 +2021,9 @@ enum bingham_status bingham_ahrs_set_state(struct bingham_ahrs *a,
  * noise since the last correction) scaled by what the accelerometer's and the magnetometer's
  * innovations show (tilt and heading apart), widened by the errors of the tilt and heading
  * references that the sensors show, and with the heading error a tilt error brings through the
- * magnetometer (`tan(dip)` times the tilt about north: tilt and heading are correlated)
- * (docs/design.md, "Stated uncertainty"; coverage measured in docs/accuracy/ahrs.md, "The
+ * magnetometer (`tan(dip)` times the tilt about north: tilt and heading are correlated); the
+ * variance of gyroscope gaps and the drift the gyroscope's scale error explains are stated
+ * unscaled (docs/design.md, "Stated uncertainty"; coverage measured in docs/accuracy/ahrs.md, "The
  * stated uncertainty").
  *
  * Errors: `BINGHAM_ERR_NULL_ARGUMENT` (`a`, `spread`), `BINGHAM_ERR_NUMERICAL` (the moments

@@ -92,6 +92,29 @@ impl BiasState {
         self.p.fixed_view::<3, 3>(0, 0).into_owned()
     }
 
+    /// The part of the orientation error's covariance (rad², body frame of the current sample)
+    /// that the scale error explains, `C_s P_ss⁺ C_sᵀ` (`C_s = Cov(θ, s_true − ŝ)`, `P_ss` the
+    /// scale error's covariance), as a root `X` with that part `XᵀX` (3×3: rows in the scale
+    /// error's space, columns the body axes). A scale error is one constant of the sensor,
+    /// whose prior (`gyro_scale_std`) the corrections barely narrow, so the heading drift it
+    /// brings is as large as that prior says whatever the white noises are (module
+    /// `uncertainty`). Zero without a scale prior.
+    pub(super) fn scale_root(&self) -> Matrix3<f64> {
+        let pss = self.p.fixed_view::<3, 3>(3, 3).into_owned();
+        if pss.trace() <= 0.0 {
+            return Matrix3::zeros();
+        }
+        let cs = self.c.fixed_view::<3, 3>(0, 3).into_owned();
+        // P_ss = L Lᵀ: C_s P_ss⁻¹ C_sᵀ = XᵀX, X = L⁻¹ C_sᵀ (a triangular solve, no inverse);
+        // a singular P_ss (a scale error learned exactly along a direction) by the
+        // pseudo-inverse's square root
+        lower_solve(&pss, &cs.transpose()).unwrap_or_else(|| {
+            let e = SymmetricEigen::new(pinv(&pss));
+            let root = e.eigenvalues.map(|v| v.max(0.0).sqrt());
+            Matrix3::from_diagonal(&root) * e.eigenvectors.transpose() * cs.transpose()
+        })
+    }
+
     /// One gyroscope sample: `r` the rotation matrix of the body increment, `w` the rate
     /// (rad/s; the scale error's effect on the orientation is `diag(w)` times it), `q` the
     /// gyroscope's own noise added to the orientation (rad², isotropic), `drift` the bias's
@@ -300,6 +323,28 @@ pub(super) fn pinv(a: &Matrix3<f64>) -> Matrix3<f64> {
         }
     });
     e.eigenvectors * Matrix3::from_diagonal(&l) * e.eigenvectors.transpose()
+}
+
+/// `L⁻¹ b`, `L` the Cholesky factor of a symmetric positive definite `a` (`a = L Lᵀ`), by
+/// forward substitution; `None` when a pivot is not positive (not positive definite, or NaN).
+fn lower_solve(a: &Matrix3<f64>, b: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    // the reciprocals of L's diagonal: three divisions instead of one per entry
+    let inv = |d: f64| if d > 0.0 { Some(1.0 / d.sqrt()) } else { None };
+    let i00 = inv(a[(0, 0)])?;
+    let l10 = a[(1, 0)] * i00;
+    let l20 = a[(2, 0)] * i00;
+    let i11 = inv(a[(1, 1)] - l10 * l10)?;
+    let l21 = (a[(2, 1)] - l20 * l10) * i11;
+    let i22 = inv(a[(2, 2)] - l20 * l20 - l21 * l21)?;
+    let mut x = Matrix3::zeros();
+    for j in 0..3 {
+        let x0 = b[(0, j)] * i00;
+        let x1 = (b[(1, j)] - l10 * x0) * i11;
+        x[(0, j)] = x0;
+        x[(1, j)] = x1;
+        x[(2, j)] = (b[(2, j)] - l20 * x0 - l21 * x1) * i22;
+    }
+    Some(x)
 }
 
 /// Below this bound on the condition number `tr(A)·tr(A⁻¹)` a positive definite `A` has no
@@ -520,6 +565,14 @@ mod tests {
         }
         assert!((st.c[(0, 0)] + sb * sb).abs() < 1e-12, "{}", st.c);
         assert!((st.c[(0, 3)] + w * ss * ss).abs() < 1e-12, "{}", st.c);
+        // the scale error explains (t w σ_s)² of θ_x's variance, and nothing else
+        let x = st.scale_root();
+        let m = x.transpose() * x;
+        assert!((m[(0, 0)] - w * w * ss * ss).abs() < 1e-15, "{m}");
+        assert!(
+            m.iter().enumerate().all(|(k, v)| k == 0 || v.abs() < 1e-18),
+            "{m}"
+        );
         let n = st.take_pending();
         let var = 1e-6 + sb * sb + w * w * ss * ss;
         assert!((n[(0, 0)] - var).abs() < 1e-12, "{n}");
@@ -539,6 +592,37 @@ mod tests {
         // the variance of the scale error along x shrank by the share the correction explained
         let p_ss = ss * ss - (w * ss * ss) * (w * ss * ss) / var;
         assert!((st.p[(3, 3)] - p_ss).abs() < 1e-9, "{}", st.p[(3, 3)]);
+    }
+
+    /// The triangular solve gives the pseudo-inverse's quadratic form where `P_ss` is positive
+    /// definite, and declines (for the pseudo-inverse to take over) where it is singular.
+    #[test]
+    fn the_scale_errors_part_by_triangular_solve_matches_the_inverse() {
+        let cs = Matrix3::new(1e-5, -2e-6, 3e-7, 4e-6, 5e-5, -1e-6, -3e-6, 2e-6, 8e-5);
+        for (i, a) in [
+            Matrix3::new(4e-6, 1e-6, -5e-7, 1e-6, 3e-6, 2e-7, -5e-7, 2e-7, 1e-6),
+            Matrix3::from_diagonal(&Vector3::new(1e-6, 1e-6, 1e-6)),
+            Matrix3::new(1.0, 0.999, 0.0, 0.999, 1.0, 0.0, 0.0, 0.0, 1e-3) * 1e-6,
+        ]
+        .iter()
+        .enumerate()
+        {
+            let x = lower_solve(a, &cs.transpose()).expect("positive definite");
+            let got = x.transpose() * x;
+            let want = cs * a.try_inverse().unwrap() * cs.transpose();
+            let err = (got - want).norm() / want.norm();
+            assert!(err < 1e-12, "case {i}: {err:e}");
+        }
+        let singular = Matrix3::from_diagonal(&Vector3::new(1e-6, 0.0, 1e-6));
+        assert!(lower_solve(&singular, &cs).is_none());
+        // a singular P_ss: the root of the pseudo-inverse's form
+        let mut st = BiasState::new(0.01, 0.01);
+        st.p.fixed_view_mut::<3, 3>(3, 3).copy_from(&singular);
+        st.c.fixed_view_mut::<3, 3>(0, 3).copy_from(&cs);
+        let x = st.scale_root();
+        let want = cs * pinv(&singular) * cs.transpose();
+        assert!((x.transpose() * x - want).norm() < 1e-12 * want.norm());
+        assert!(lower_solve(&Matrix3::from_element(f64::NAN), &cs).is_none());
     }
 
     #[test]
@@ -562,6 +646,7 @@ mod tests {
         assert_eq!(st.s, Vector3::zeros());
         assert!(st.p.fixed_rows::<3>(3).iter().all(|&v| v == 0.0));
         assert!(st.c.fixed_columns::<3>(3).iter().all(|&v| v == 0.0));
+        assert_eq!(st.scale_root(), Matrix3::zeros());
     }
 
     #[test]

@@ -238,7 +238,9 @@ impl Ahrs {
     /// Replaces the orientation estimate by `Bingham(M, z)` (`m` 4×4 row-major orthogonal,
     /// `z` 4 concentrations in any order and shift; validated as [`BinghamFilter::new`]), e.g.
     /// a known start or a re-initialization. The bias estimate, the low-pass filters and the
-    /// magnetic reference are kept. Set before the first sample, it replaces the
+    /// magnetic reference are kept; the new state's error is the caller's, so its coupling to
+    /// the bias's and the scale error's (which the corrections learn them from) starts afresh,
+    /// as after the recovery from a wrong start. Set before the first sample, it replaces the
     /// self-initialization: the first sample then only primes the low-pass filters.
     ///
     /// Errors: [`Error::InvalidDimension`] (lengths), [`Error::InvalidArgument`] (NaN/Inf, `M`
@@ -254,8 +256,10 @@ impl Ahrs {
         }
         self.sample_state.omega = [omega[0], omega[1], omega[2], omega[3]];
         self.sample_state.bias.pending = Matrix3::zeros();
-        // the new state carries none of the gaps' variance (module `uncertainty`)
+        // the new state carries none of the gaps' variance, nor the part a scale error
+        // explained through the old state's coupling (module `uncertainty`)
         self.sample_state.gyro.gap_stated = 0.0;
+        self.sample_state.bias.decouple();
         Ok(())
     }
 
@@ -379,6 +383,7 @@ impl Ahrs {
             tilt_ref_steady: s.calib.steady_tilt_reference_variance(),
             heading_ref: s.mag.stated_heading_reference_variance(),
             gap: s.gyro.gap_stated,
+            scale_root: s.bias.scale_root(),
             coupling,
         }
     }

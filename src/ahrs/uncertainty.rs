@@ -61,6 +61,13 @@
 //! with the motion about that mean; of such an error the heading's average over `mag_tau`
 //! passes only the share `f = acc_tau/(acc_tau + mag_tau)` (1/3 by default): `(1 − f) C +
 //! f A C Aᵀ` ([`Coupling`]).
+//!
+//! Two parts of the filter's covariance are not white noise in the parameters' units, so the
+//! innovations' factor does not describe them and they are stated at their size: the variance
+//! gyroscope gaps add ([`Parts::gap`]), and the part the gyroscope's scale error explains
+//! ([`Parts::scale_root`]), a constant of the sensor whose prior the corrections barely narrow:
+//! the heading drift it brings in a long magnetic rejection is as large as that prior says,
+//! however clean the sensor's noises are.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -187,6 +194,10 @@ pub(super) struct Parts {
     /// The variance (rad² per axis) that gyroscope gaps have added: physical, in the filter's
     /// covariance unscaled, so stated as it is, not scaled.
     pub(super) gap: f64,
+    /// A root `X` of the part `XᵀX` of the filter's covariance (rad², body frame) that the
+    /// gyroscope's scale error explains (`BiasState::scale_root`): one constant of the sensor,
+    /// so stated unscaled, as the gaps' variance is.
+    pub(super) scale_root: Matrix3<f64>,
     /// The heading's coupling to the tilt ([`Coupling::NONE`] for the covariance of the errors
     /// the filter models).
     pub(super) coupling: Coupling,
@@ -203,17 +214,19 @@ impl Parts {
 }
 
 /// The stated variances along the principal directions, from their world-frame vertical
-/// components `z` and the pending noise's variances along them `noise` (rad²): `v_i =
-/// s_i (var_i + noise_i) + (1 − s_i) gap + heading_ref z_i² + tilt_ref (1 − z_i²)`, `s_i` the
-/// direction's factor: the diagonal of [`stated`]'s covariance, in the principal basis, before
-/// the heading's coupling to the tilt.
-pub(super) fn stated_variances(z: &[f64; 3], noise: &[f64; 3], parts: &Parts) -> [f64; 3] {
+/// components `z`, the pending noise's variances along them `noise` and the scale error's part
+/// `scale` (rad², [`Parts::scale_root`]'s part along them): `v_i = s_i (var_i + noise_i) + (1 − s_i)
+/// (gap + scale_i) + heading_ref z_i² + tilt_ref (1 − z_i²)`, `s_i` the direction's factor
+/// (`(1 − s_i)` at least 0: a factor above 1 widens those parts with the rest): the diagonal of
+/// [`stated`]'s covariance, in the principal basis, before the heading's coupling to the tilt.
+fn stated_variances(z: &[f64; 3], noise: &[f64; 3], scale: &[f64; 3], parts: &Parts) -> [f64; 3] {
     let tilt_ref = parts.tilt_ref;
     std::array::from_fn(|i| {
         let z2 = (z[i] * z[i]).min(1.0);
         let s = parts.scale_along(z2);
-        // the gaps' variance is in `var` scaled by s: state it at its physical size
-        let g = (parts.gap * (1.0 - s)).max(0.0);
+        // the gaps' and the scale error's variances are in `var` scaled by s: state them at
+        // their physical size
+        let g = ((parts.gap + scale[i].max(0.0)) * (1.0 - s)).max(0.0);
         (s * (parts.var[i].max(0.0) + noise[i])).max(0.0)
             + g
             + parts.heading_ref * z2
@@ -239,11 +252,15 @@ pub(super) fn stated(
 ) -> Matrix3<f64> {
     let u = Matrix3::from_columns(dirs);
     let n = u.transpose() * extra * u;
+    let xu = parts.scale_root * u;
+    let m = xu.transpose() * xu;
     let d = r * u;
     let z = [d[(2, 0)], d[(2, 1)], d[(2, 2)]];
     let noise = [n[(0, 0)], n[(1, 1)], n[(2, 2)]];
-    let v = stated_variances(&z, &noise, parts);
+    let scale = [m[(0, 0)], m[(1, 1)], m[(2, 2)]];
+    let v = stated_variances(&z, &noise, &scale, parts);
     let s: [f64; 3] = std::array::from_fn(|i| parts.scale_along(z[i] * z[i]));
+    let w: [f64; 3] = std::array::from_fn(|i| (1.0 - s[i]).max(0.0));
     let tilt_ref = parts.tilt_ref;
     let k = Matrix3::from_fn(|i, j| {
         if i == j {
@@ -252,6 +269,7 @@ pub(super) fn stated(
             v[i] - parts.heading_ref * z2 - tilt_ref * (1.0 - z2)
         } else {
             0.5 * (n[(i, j)] + n[(j, i)]) * (s[i] * s[j]).sqrt()
+                + 0.5 * (m[(i, j)] + m[(j, i)]) * (w[i] * w[j]).sqrt()
         }
     });
     // the filter's own errors (correlated over about acc_tau), the tilt reference's (its
@@ -664,5 +682,47 @@ mod tests {
         assert!((sc.apply(&wide) - expected).norm() < 1e-20);
         assert!(sc.apply(&wide).symmetric_eigenvalues().min() > 0.0);
         assert_eq!(StatedCoupling::NONE.apply(&wide), wide);
+    }
+
+    /// A direction whose variance the gyroscope's scale error explains is stated at that
+    /// variance whatever the innovations' factor below 1 is (a constant of the sensor, not a
+    /// white noise the factor measures), and widened with the rest by a factor above 1; the
+    /// other directions keep their scaled variances, and the covariance stays one.
+    #[test]
+    fn the_scale_errors_part_is_stated_unscaled() {
+        let a = 4e-4;
+        let dirs = [Vector3::x(), Vector3::y(), Vector3::z()];
+        let part = |sh: f64, scale_root: Matrix3<f64>| Parts {
+            var: [1e-4, 1e-4, a],
+            scales: (0.5, sh),
+            tilt_ref: 0.0,
+            tilt_ref_steady: 0.0,
+            heading_ref: 0.0,
+            gap: 0.0,
+            scale_root,
+            coupling: Coupling::NONE,
+        };
+        // roots: the part a e_z e_zᵀ, and a v vᵀ
+        let along_z = Matrix3::from_diagonal(&Vector3::new(0.0, 0.0, a.sqrt()));
+        let z = Matrix3::zeros();
+        let i = Matrix3::identity();
+        for sh in [0.1, 0.25, 0.9] {
+            let c = stated(&i, &dirs, &z, &part(sh, along_z));
+            assert!((c[(2, 2)] - a).abs() < 1e-18, "s_h {sh}: {}", c[(2, 2)]);
+            assert!((c[(0, 0)] - 0.5e-4).abs() < 1e-18);
+            let without = stated(&i, &dirs, &z, &part(sh, Matrix3::zeros()));
+            assert!((without[(2, 2)] - sh * a).abs() < 1e-18);
+        }
+        let c = stated(&i, &dirs, &z, &part(2.0, along_z));
+        assert!((c[(2, 2)] - 2.0 * a).abs() < 1e-18);
+        // a part across directions of unequal factors stays positive semi-definite
+        let v = Vector3::new(0.0, 0.6, 0.8);
+        let root = Matrix3::from_rows(&[
+            v.transpose() * a.sqrt(),
+            Vector3::zeros().transpose(),
+            Vector3::zeros().transpose(),
+        ]);
+        let c = stated(&i, &dirs, &z, &part(0.1, root));
+        assert!(c.symmetric_eigenvalues().min() > 0.0, "{c}");
     }
 }
