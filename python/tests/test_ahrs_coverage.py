@@ -2,9 +2,10 @@
 samples whose error lies within 1x and 2x the stated spread, per axis group, on the shared BROAD
 trials and on the simulated suite (docs/accuracy/ahrs.md, "The stated uncertainty").
 
-The bounds are the figures measured when the stated uncertainty was introduced, with a margin of
-a few hundredths (they move with any change of the AHRS); the issue's target (0.50-0.85 within
-1x, at least 0.95 within 2x) is not yet met everywhere, and these assertions say where it is.
+The issue's target is 0.50-0.85 within 1x and at least 0.95 within 2x. It is met on the suite in
+every group and on BROAD in heading and total, and these tests assert it there. BROAD's tilt has
+heavy tails (the reference's timing, docs/accuracy/ahrs.md note 8), and its bounds are the figures
+measured, with a margin of a few hundredths.
 """
 
 import glob
@@ -58,14 +59,17 @@ def test_broad_heading_and_total_are_near_calibrated():
     assert 0.60 <= tilt[0] <= 0.75 and tilt[1] >= 0.85, tilt
 
 
-def test_the_suite_is_covered_without_being_ten_times_too_wide():
-    names = [n for n, _, _, _ in ahrs_suite.scenarios()][:26]
-    jobs = [(n, ov, settle, {}) for n, _, ov, settle in ahrs_suite.scenarios() if n in names]
+def test_the_suite_meets_the_target_in_every_group():
+    # the 44 scenarios with known truth (the 26 of the suite and the 18 of issue 34's
+    # mechanisms): issue 34's target in heading, tilt and total. The 2x shares stand 0.004 to
+    # 0.015 above it (docs/accuracy/ahrs.md, "The stated uncertainty", note 10); the tails are
+    # the unobservable field offset and the long rejection with a gyroscope scale error
+    jobs = [(n, ov, settle, {}) for n, _, ov, settle in ahrs_suite.scenarios()]
+    assert len(jobs) == 44
     rows = [ahrs_coverage.sim_job(j) for j in jobs]
     p = ahrs_coverage.pooled(rows)
-    tilt, total = p["tilt"], p["total"]
-    # tilt meets the issue's target; the total is over-covered but no longer ~10x too wide
-    # (RMS error / RMS spread was 0.14 before the stated uncertainty)
-    assert 0.5 <= tilt[0] <= 0.85 and tilt[1] >= 0.95, tilt
-    assert total[1] >= 0.95 and total[4] >= 0.4, total
-    assert p["spearman"] > 0.2, p["spearman"]
+    for group in ("heading", "tilt", "total"):
+        share = p[group]
+        assert 0.5 <= share[0] <= 0.85 and share[1] >= 0.95, (group, share)
+    # the spread moves with the error: segments' error and spread rank alike
+    assert p["spearman"] > 0.4, p["spearman"]
