@@ -100,10 +100,11 @@ impl Magnetic {
     }
 
     /// The variance (rad²) of the heading reference's error: the field's directional variance
-    /// from the norm's and the dip's variation, over `cos²(dip)` (module `uncertainty`); 0
+    /// from the norm's and the dip's variation, or their deviation now where that is larger
+    /// ([`Inhomogeneity::evidence_variance`]), over `cos²(dip)` (module `uncertainty`); 0
     /// without a reference.
     pub(super) fn heading_reference_variance(&self) -> f64 {
-        self.over_cos2_dip(self.inhomogeneity.variance())
+        self.over_cos2_dip(self.inhomogeneity.evidence_variance())
     }
 
     /// The heading reference's variance (rad²) as the stated covariance takes it: the local
@@ -262,7 +263,7 @@ impl Magnetic {
         let k = c.mag_ref;
         self.reference = Some((rn + k * (norm - rn), rd + k * (dip - rd)));
         self.inhomogeneity
-            .push(raw_norm, raw_dip, h, self.tilt_variance);
+            .push(raw_norm, raw_dip, h, self.tilt_variance, p.mag_tau);
         let mw = q4::rotate(q, m);
         match self.lp.as_mut() {
             Some(lp) => (0..repeat).for_each(|_| lp.step(&mw)),

@@ -42,7 +42,8 @@
 //! variance gains the field's directional variance ([`Inhomogeneity`]: the variance over
 //! [`CALIBRATION_TIME`] of the dip and of the relative norm, each smoothed over
 //! [`SMOOTH_TIME`] so that the sensor's white noise does not count), over `cos²(dip)` (a
-//! horizontal deviation `δ` turns the heading by `δ/(|m| cos dip)`). The dip is measured
+//! horizontal deviation `δ` turns the heading by `δ/(|m| cos dip)`), or the field's deviation
+//! now where that is larger ([`Inhomogeneity::evidence_variance`]). The dip is measured
 //! against the state's "up", so its variance also holds the state's own tilt error; the
 //! stated covariance takes the dip's variance less the average stated tilt variance
 //! ([`Inhomogeneity::field_variance`]), because it carries that error itself, as follows.
@@ -423,13 +424,18 @@ pub(super) struct Inhomogeneity {
     /// The average of the state's stated tilt variance (rad² per axis) at the samples: the
     /// part of the dip's variance that is the state's own tilt error.
     tilt: Average,
+    /// The smoothed norm's and dip's current deviation from their means, as a directional
+    /// variance `((n/n̄ − 1)² + (dip − dip̄)²)/2` (rad²), low-passed over the heading average's
+    /// time constant.
+    current: f64,
 }
 
 impl Inhomogeneity {
     /// One undisturbed sample of norm `norm` and dip `dip` (rad, measured against the
     /// state's "up"), `h` seconds long, taken while the state's stated tilt variance is
-    /// `tilt_var` (rad² per axis).
-    pub(super) fn push(&mut self, norm: f64, dip: f64, h: f64, tilt_var: f64) {
+    /// `tilt_var` (rad² per axis); `tau` (s) the heading average's time constant, over which
+    /// the current deviation is low-passed ([`Inhomogeneity::evidence_variance`]).
+    pub(super) fn push(&mut self, norm: f64, dip: f64, h: f64, tilt_var: f64, tau: f64) {
         if self.smoothed == 0.0 {
             self.smooth = (norm, dip);
         } else {
@@ -446,6 +452,13 @@ impl Inhomogeneity {
         }
         let alpha = (h / CALIBRATION_TIME).min(1.0);
         let n = self.smooth.0;
+        let mean = self.norm.value();
+        if mean > 0.0 {
+            let dn = n / mean - 1.0;
+            let dd = self.smooth.1 - self.dip.value();
+            let d2 = 0.5 * (dn * dn + dd * dd);
+            self.current += h / (tau + h) * (d2 - self.current);
+        }
         self.norm.push(n, alpha);
         self.norm2.push(n * n, alpha);
         self.dip.push(self.smooth.1, alpha);
@@ -474,13 +487,25 @@ impl Inhomogeneity {
         0.5 * (norm + dip)
     }
 
+    /// The directional variance (rad²) the heading evidence takes: [`Inhomogeneity::variance`],
+    /// or the current deviation of the smoothed norm and dip from their means over the heading
+    /// average's time where that is larger. A field whose norm or dip is off its usual value
+    /// now — a magnet near enough to move them, not enough to fail the disturbance test — is
+    /// likely as far off in its direction, and the heading average holds it for `mag_tau`.
+    pub(super) fn evidence_variance(&self) -> f64 {
+        self.variance().max(self.current)
+    }
+
     /// The local field's own directional variance per direction (rad²): as
-    /// [`Inhomogeneity::variance`], with the dip's variance less the state's own tilt error's
-    /// (the dip is measured against the state's "up"; the stated covariance has that error in
-    /// its tilt, and turns it into the heading's error itself).
+    /// [`Inhomogeneity::evidence_variance`], with the dip's part less the state's own tilt
+    /// error's variance (the dip is measured against the state's "up"; the stated covariance
+    /// has that error in its tilt, and turns it into the heading's error itself).
     pub(super) fn field_variance(&self) -> f64 {
         let (norm, dip) = self.variances();
-        0.5 * (norm + (dip - self.tilt.value()).max(0.0))
+        let tilt = self.tilt.value();
+        // the current deviation as the evidence takes it ([`Inhomogeneity::evidence_variance`]),
+        // its dip's part less the tilt error too
+        (0.5 * (norm + (dip - tilt).max(0.0))).max(self.current - 0.5 * tilt)
     }
 
     /// The relative norm's variance (relative to its mean's square) and the dip's (rad²); 0
@@ -508,7 +533,13 @@ mod tests {
         let h = 0.01;
         for k in 0..(seconds / h) as usize {
             let phase = 2.0 * std::f64::consts::PI * k as f64 * h / period;
-            m.push(1.0 + 0.05 * phase.sin(), 1.0 + 0.05 * phase.cos(), h, 0.0);
+            m.push(
+                1.0 + 0.05 * phase.sin(),
+                1.0 + 0.05 * phase.cos(),
+                h,
+                0.0,
+                3.0,
+            );
         }
         m
     }
@@ -524,7 +555,7 @@ mod tests {
         let v = learned.variance();
         assert!((0.8e-3..1.3e-3).contains(&v), "{v:e}");
         let mut fresh = Inhomogeneity::default();
-        fresh.push(1.0, 0.9, 0.01, 0.0);
+        fresh.push(1.0, 0.9, 0.01, 0.0, 3.0);
         assert_eq!(fresh.variance(), 0.0);
         let handed = fresh.with_averages_of(&learned);
         assert_eq!(handed.variance(), v);
@@ -534,7 +565,7 @@ mod tests {
         // the variance
         let mut later = handed;
         for _ in 0..6000 {
-            later.push(1.0, 1.0, 0.01, 0.0);
+            later.push(1.0, 1.0, 0.01, 0.0, 3.0);
         }
         assert!(
             later.variance() < 0.5 * v,
@@ -548,6 +579,38 @@ mod tests {
     /// leaves a heading error, which must be `tan(dip)·a` ([`heading_per_tilt`]), for fields
     /// of either hemisphere. And the covariance of the filter's errors is carried over to the
     /// orientation's as that map says.
+    /// The heading evidence's variance follows a field that moves off its usual norm now (a
+    /// magnet's edge within the disturbance test's tolerances) and is the field's variance
+    /// where the field only varies as it always has.
+    #[test]
+    fn a_field_off_its_usual_norm_now_widens_the_heading_evidence() {
+        let h = 0.01;
+        let mut m = Inhomogeneity::default();
+        for _ in 0..6000 {
+            m.push(1.0, 1.0, h, 0.0, 3.0);
+        }
+        assert!(m.evidence_variance() < 1e-20);
+        // 6 s at a norm 5 % off: the deviation's square, (0.05²)/2, smoothed over 1 s and
+        // low-passed over 3 s, reaches most of itself; the 30-s variance a fraction of it
+        for _ in 0..600 {
+            m.push(1.05, 1.0, h, 0.0, 3.0);
+        }
+        let d2 = 0.5 * 0.05 * 0.05;
+        let e = m.evidence_variance();
+        assert!(e > 0.5 * d2 && e < d2, "{e} vs {d2}");
+        assert!(e > 3.0 * m.variance(), "{e} vs {}", m.variance());
+        // a field that varies as it always has (±5 %, ±0.05 rad over 10 s): the evidence takes
+        // about its variance, not a multiple of it
+        let v = varying(300.0, 10.0);
+        assert!(
+            v.evidence_variance() < 2.0 * v.variance(),
+            "{} vs {}",
+            v.evidence_variance(),
+            v.variance()
+        );
+        assert!(v.evidence_variance() >= v.variance());
+    }
+
     #[test]
     fn a_tilt_error_about_north_turns_the_heading_by_tan_dip() {
         use nalgebra::{Rotation3, Vector3};
@@ -591,7 +654,7 @@ mod tests {
 
     /// The dip is measured against the state's "up": the field's own variance leaves out the
     /// state's tilt variance, which the stated covariance carries itself; the filter's
-    /// [`Inhomogeneity::variance`] keeps it.
+    /// [`Inhomogeneity::evidence_variance`] keeps it.
     #[test]
     fn the_fields_own_variance_leaves_out_the_states_tilt_error() {
         let h = 0.01;
@@ -600,8 +663,8 @@ mod tests {
         for k in 0..12_000 {
             // the dip moves by a state's tilt error of about 0.02 rad RMS, the norm not at all
             let e = 0.02 * 2f64.sqrt() * (2.0 * std::f64::consts::PI * k as f64 * h / 10.0).sin();
-            m.push(1.0, 0.9 + e, h, 4e-4);
-            still.push(1.0, 0.9 + e, h, 0.0);
+            m.push(1.0, 0.9 + e, h, 4e-4, 3.0);
+            still.push(1.0, 0.9 + e, h, 0.0, 3.0);
         }
         // the smoothed dip's variance: 0.02² through the 1-s smoothing, 1/(1 + (2π/10)²)
         let dip = 2.0 * m.variance();
@@ -612,7 +675,9 @@ mod tests {
             "{:e}",
             m.field_variance()
         );
-        assert_eq!(still.field_variance(), still.variance());
+        // without a tilt error the two agree, the current deviation included where it is larger
+        assert_eq!(still.field_variance(), still.evidence_variance());
+        assert!(still.evidence_variance() >= still.variance());
     }
 
     /// The filter's own tilt error reaches the heading through its average: `(1 − f) c +
