@@ -38,6 +38,20 @@ impl fmt::Display for Error {
 
 impl std::error::Error for Error {}
 
+impl Error {
+    /// The same error with `what` and ": " in front of its message (e.g. "sample 12"), for a
+    /// call that fails on one item of many.
+    pub(crate) fn prefixed(self, what: &str) -> Error {
+        match self {
+            Error::InvalidDimension(m) => Error::InvalidDimension(format!("{what}: {m}")),
+            Error::InvalidArgument(m) => Error::InvalidArgument(format!("{what}: {m}")),
+            Error::NotConverged(m) => Error::NotConverged(format!("{what}: {m}")),
+            Error::Numerical(m) => Error::Numerical(format!("{what}: {m}")),
+            Error::Callback(m) => Error::Callback(format!("{what}: {m}")),
+        }
+    }
+}
+
 /// Result type of the core API.
 pub type Result<T> = std::result::Result<T, Error>;
 

@@ -142,11 +142,5 @@ impl Ahrs {
 
 /// `e` with "sample k: " in front of its message.
 fn prefix(e: Error, k: usize) -> Error {
-    match e {
-        Error::InvalidDimension(m) => Error::InvalidDimension(format!("sample {k}: {m}")),
-        Error::InvalidArgument(m) => Error::InvalidArgument(format!("sample {k}: {m}")),
-        Error::NotConverged(m) => Error::NotConverged(format!("sample {k}: {m}")),
-        Error::Numerical(m) => Error::Numerical(format!("sample {k}: {m}")),
-        Error::Callback(m) => Error::Callback(format!("sample {k}: {m}")),
-    }
+    e.prefixed(&format!("sample {k}"))
 }

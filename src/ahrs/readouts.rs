@@ -2,7 +2,7 @@
 //! and scale estimates, the latency estimate, and what the offline smoother hands between its
 //! passes.
 
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Vector3};
 
 use crate::error::{Error, Result};
 use crate::quaternion::q4;
@@ -12,6 +12,10 @@ use super::estimator::Ahrs;
 use super::health::AhrsHealth;
 use super::magnetic::MagReference;
 use super::uncertainty::{self, StatedCoupling};
+
+/// A stated covariance (rad², world frame) and the state's principal directions at the mode
+/// (world frame, unit vectors).
+type Stated = (Matrix3<f64>, [Vector3<f64>; 3]);
 
 impl Ahrs {
     /// The angular spread of the state (radians): `out[0..3]` the standard deviations along
@@ -23,22 +27,14 @@ impl Ahrs {
     /// heading error a tilt error brings through the magnetometer (module `uncertainty`).
     /// Before the first sample: that of the uniform distribution.
     pub fn angular_spread(&self, out: &mut [f64; 4]) -> Result<()> {
-        let Some(f) = &self.filter else {
+        let Some((c, world_dirs)) = self.stated(true)? else {
             crate::observation::spread_from_omega(&[0.25; 4], out);
             return Ok(());
         };
         // the stated covariance's variances along the principal directions (world frame):
         // their sum is its trace
-        let core = f.core4()?;
-        let (m, _) = core.params();
-        let q = core.mode();
-        let r = q4::to_matrix(&q);
-        let r = Matrix3::from_fn(|i, j| r[i][j]);
-        let dirs = bias::principal_directions(m, &q);
-        let pending = bias::psd(&self.sample_state.bias.pending);
-        let c = uncertainty::stated(&r, &dirs, &pending, &self.stated_parts(true));
         let v: [f64; 3] = std::array::from_fn(|i| {
-            let d = r * dirs[i];
+            let d = world_dirs[i];
             (d.transpose() * c * d)[0].max(0.0)
         });
         for (o, x) in out.iter_mut().zip(&v) {
@@ -93,6 +89,12 @@ impl Ahrs {
     /// The stated covariance (world frame, module `uncertainty`), with the heading's coupling to
     /// the tilt if `coupled`; `None` before the first sample.
     fn stated_covariance(&self, coupled: bool) -> Result<Option<Matrix3<f64>>> {
+        Ok(self.stated(coupled)?.map(|(c, _)| c))
+    }
+
+    /// The stated covariance as [`Ahrs::stated_covariance`] has it, and the state's principal
+    /// directions at the mode in the world frame (unit vectors).
+    fn stated(&self, coupled: bool) -> Result<Option<Stated>> {
         let Some(f) = &self.filter else {
             return Ok(None);
         };
@@ -104,12 +106,8 @@ impl Ahrs {
         let dirs = bias::principal_directions(m, &q);
         // the pending noise made positive semi-definite, as the next correction takes it
         let pending = bias::psd(&self.sample_state.bias.pending);
-        Ok(Some(uncertainty::stated(
-            &r,
-            &dirs,
-            &pending,
-            &self.stated_parts(coupled),
-        )))
+        let c = uncertainty::stated(&r, &dirs, &pending, &self.stated_parts(coupled));
+        Ok(Some((c, dirs.map(|d| r * d))))
     }
 
     /// What the stated covariance is made of besides the principal directions, with the

@@ -10,19 +10,8 @@ use super::handoff::{latency_ready, Handoff};
 use super::store::{pack9, Forward, ForwardBias, Pass};
 use super::types::{Fusion, SmoothInput, SmoothOptions};
 use crate::ahrs::{Ahrs, AhrsParams};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::quaternion::q4;
-
-/// `e` with `what` in front of its message.
-fn prefix(e: Error, what: &str) -> Error {
-    match e {
-        Error::InvalidDimension(m) => Error::InvalidDimension(format!("{what}: {m}")),
-        Error::InvalidArgument(m) => Error::InvalidArgument(format!("{what}: {m}")),
-        Error::NotConverged(m) => Error::NotConverged(format!("{what}: {m}")),
-        Error::Numerical(m) => Error::Numerical(format!("{what}: {m}")),
-        Error::Callback(m) => Error::Callback(format!("{what}: {m}")),
-    }
-}
 
 /// Whether a row is a sample (every value finite, the norm representable).
 pub(super) fn usable(v: &[f64; 3]) -> bool {
@@ -100,7 +89,7 @@ pub(super) fn forward_pass(
         let m = input.mag.map(|m| &m[k]);
         let dt = step_time(input.time, k, nominal);
         ahrs.update_dt(dt, &input.gyr[k], &input.acc[k], m)
-            .map_err(|e| prefix(e, &format!("sample {k}")))?;
+            .map_err(|e| e.prefixed(&format!("sample {k}")))?;
         store.states.push(Forward {
             q: ahrs.quaternion(),
             c: pack9(&ahrs.filter_covariance()?),
@@ -236,7 +225,7 @@ pub(super) fn backward_pass(
             }
         }
         back.update_reversed(dt, &g, &far, &acc, mag.as_ref())
-            .map_err(|e| prefix(e, &format!("backward pass, sample {k}")))?;
+            .map_err(|e| e.prefixed(&format!("backward pass, sample {k}")))?;
         if start.is_none() {
             // the field's reference (norm and dip, what the disturbance test compares with)
             // from the forward pass, not from the last sample, which may lie in a disturbance
