@@ -39,6 +39,7 @@ use nalgebra::{
     Vector3, Vector4, U1,
 };
 
+use crate::linalg::{cholesky3, forward3};
 use crate::quaternion::q4;
 
 /// The orientation error's cross-covariance with `[b; s]` (3×6).
@@ -108,7 +109,7 @@ impl BiasState {
         // P_ss = L Lᵀ: C_s P_ss⁻¹ C_sᵀ = XᵀX, X = L⁻¹ C_sᵀ (a triangular solve, no inverse);
         // a singular P_ss (a scale error learned exactly along a direction) by the
         // pseudo-inverse's square root
-        lower_solve(&pss, &cs.transpose()).unwrap_or_else(|| {
+        lower_solve(&pss, &cs).unwrap_or_else(|| {
             let e = SymmetricEigen::new(pinv(&pss));
             let root = e.eigenvalues.map(|v| v.max(0.0).sqrt());
             Matrix3::from_diagonal(&root) * e.eigenvectors.transpose() * cs.transpose()
@@ -325,26 +326,13 @@ pub(super) fn pinv(a: &Matrix3<f64>) -> Matrix3<f64> {
     e.eigenvectors * Matrix3::from_diagonal(&l) * e.eigenvectors.transpose()
 }
 
-/// `L⁻¹ b`, `L` the Cholesky factor of a symmetric positive definite `a` (`a = L Lᵀ`), by
-/// forward substitution; `None` when a pivot is not positive (not positive definite, or NaN).
-fn lower_solve(a: &Matrix3<f64>, b: &Matrix3<f64>) -> Option<Matrix3<f64>> {
-    // the reciprocals of L's diagonal: three divisions instead of one per entry
-    let inv = |d: f64| if d > 0.0 { Some(1.0 / d.sqrt()) } else { None };
-    let i00 = inv(a[(0, 0)])?;
-    let l10 = a[(1, 0)] * i00;
-    let l20 = a[(2, 0)] * i00;
-    let i11 = inv(a[(1, 1)] - l10 * l10)?;
-    let l21 = (a[(2, 1)] - l20 * l10) * i11;
-    let i22 = inv(a[(2, 2)] - l20 * l20 - l21 * l21)?;
-    let mut x = Matrix3::zeros();
-    for j in 0..3 {
-        let x0 = b[(0, j)] * i00;
-        let x1 = (b[(1, j)] - l10 * x0) * i11;
-        x[(0, j)] = x0;
-        x[(1, j)] = x1;
-        x[(2, j)] = (b[(2, j)] - l20 * x0 - l21 * x1) * i22;
-    }
-    Some(x)
+/// `X = L⁻¹ Cᵀ` (the columns `L⁻¹` times the rows of `c`), `L` the Cholesky factor of a
+/// symmetric positive definite `a` ([`cholesky3`]): `c a⁻¹ cᵀ = XᵀX`. `None` unless `a` is
+/// positive definite.
+fn lower_solve(a: &Matrix3<f64>, c: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let l = cholesky3(a)?;
+    let col = |i: usize| forward3(&l, &c.row(i).transpose());
+    Some(Matrix3::from_columns(&[col(0), col(1), col(2)]))
 }
 
 /// Below this bound on the condition number `tr(A)·tr(A⁻¹)` a positive definite `A` has no
@@ -607,7 +595,7 @@ mod tests {
         .iter()
         .enumerate()
         {
-            let x = lower_solve(a, &cs.transpose()).expect("positive definite");
+            let x = lower_solve(a, &cs).expect("positive definite");
             let got = x.transpose() * x;
             let want = cs * a.try_inverse().unwrap() * cs.transpose();
             let err = (got - want).norm() / want.norm();

@@ -7,6 +7,6 @@ mod cholesky;
 mod jacobi;
 mod matrix;
 
-pub(crate) use cholesky::cholesky_solve;
+pub(crate) use cholesky::{cholesky3, cholesky_solve, forward3};
 pub use jacobi::{jacobi_general, jacobi_in_place};
 pub(crate) use matrix::*;

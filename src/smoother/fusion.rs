@@ -5,29 +5,8 @@ use nalgebra::{Matrix3, Matrix4, Vector3};
 
 use super::store::{pack, unpack, Forward, ForwardBias};
 use super::types::SmoothOptions;
+use crate::linalg::{cholesky3, forward3};
 use crate::quaternion::q4;
-
-/// The Cholesky factor `L` (lower, `S = L Lᵀ`) of a symmetric 3×3 `S` (its lower triangle
-/// read), packed as `[l00, l10, l11, l20, l21, l22]`; `None` unless `S` is positive definite
-/// (a pivot zero, negative or NaN).
-fn cholesky3(s: &Matrix3<f64>) -> Option<[f64; 6]> {
-    let pivot = |d: f64| (d > 0.0).then(|| d.sqrt());
-    let l00 = pivot(s[(0, 0)])?;
-    let l10 = s[(1, 0)] / l00;
-    let l20 = s[(2, 0)] / l00;
-    let l11 = pivot(s[(1, 1)] - l10 * l10)?;
-    let l21 = (s[(2, 1)] - l20 * l10) / l11;
-    let l22 = pivot(s[(2, 2)] - l20 * l20 - l21 * l21)?;
-    Some([l00, l10, l11, l20, l21, l22])
-}
-
-/// `L⁻¹ b` for the packed factor `l` of [`cholesky3`] (forward substitution).
-fn forward3(l: &[f64; 6], b: &Vector3<f64>) -> Vector3<f64> {
-    let y0 = b.x / l[0];
-    let y1 = (b.y - l[1] * y0) / l[2];
-    let y2 = (b.z - l[3] * y0 - l[4] * y1) / l[5];
-    Vector3::new(y0, y1, y2)
-}
 
 /// The fusion of two Gaussian estimates `(x_f, C_f)`, `(x_f + δ, C_b)`: the shift from `x_f`
 /// and the fused covariance, `C_f (C_f + C_b)⁻¹ δ` and `C_f − C_f (C_f + C_b)⁻¹ C_f`. `None`
